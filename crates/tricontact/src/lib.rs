@@ -1,0 +1,1 @@
+//! Node-to-triangular-facet contact kernel.
