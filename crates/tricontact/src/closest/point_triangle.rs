@@ -1,0 +1,103 @@
+//! Closest point of a facet to a node, and which feature (face, edge, vertex) it lies on.
+//!
+//! The facet's plane is split into seven Voronoi regions: the face, three edge slabs and three
+//! vertex wedges. With `a, b, c = x_i, x_j, x_k` and `p = x_l`, the region follows from the six dot
+//! products of the edges `ab`, `ac` with `p − a`, `p − b`, `p − c`, tested in a fixed order (vertices
+//! before the edges that contain them, edges before the face), so a node exactly on a region boundary
+//! is always assigned the lower-dimensional feature, deterministically. The closest point and its
+//! barycentric coordinates are returned with the feature.
+//!
+//! Edges are numbered from their first node: edge 0 = i–j, edge 1 = j–k, edge 2 = k–i.
+
+use crate::facet::Facet;
+use crate::linalg::Vec3;
+
+/// The feature of a facet on which a closest point lies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Feature {
+    /// The interior of the face.
+    Face,
+    /// Edge `e`, from local node `e` to local node `(e + 1) % 3`.
+    Edge(usize),
+    /// Local node `a` (0 = i, 1 = j, 2 = k).
+    Vertex(usize),
+}
+
+impl Feature {
+    /// The local nodes of the feature (one, two or three of 0, 1, 2).
+    #[must_use]
+    pub fn nodes(self) -> &'static [usize] {
+        match self {
+            Feature::Face => &[0, 1, 2],
+            Feature::Edge(0) => &[0, 1],
+            Feature::Edge(1) => &[1, 2],
+            Feature::Edge(_) => &[2, 0],
+            Feature::Vertex(0) => &[0],
+            Feature::Vertex(1) => &[1],
+            Feature::Vertex(_) => &[2],
+        }
+    }
+}
+
+/// The closest point of a facet to a node.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ClosestPoint {
+    /// The feature the closest point lies on.
+    pub feature: Feature,
+    /// Barycentric coordinates `[N_i, N_j, N_k]` of the closest point (all in `[0, 1]`).
+    pub barycentric: [f64; 3],
+    /// The closest point.
+    pub point: Vec3,
+    /// Distance from the node to the closest point.
+    pub distance: f64,
+}
+
+/// The closest point of `facet` to node `p`, with its feature.
+#[must_use]
+pub fn closest_point(facet: &Facet, p: &Vec3) -> ClosestPoint {
+    let (feature, barycentric) = region(facet, p);
+    let [xa, xb, xc] = facet.nodes();
+    let point = xa * barycentric[0] + xb * barycentric[1] + xc * barycentric[2];
+    ClosestPoint {
+        feature,
+        barycentric,
+        point,
+        distance: (p - point).norm(),
+    }
+}
+
+/// The Voronoi region of `p` and the barycentric coordinates of its closest point.
+fn region(facet: &Facet, p: &Vec3) -> (Feature, [f64; 3]) {
+    let [a, b, c] = facet.nodes();
+    let (ab, ac) = (b - a, c - a);
+    let (d1, d2) = (ab.dot(&(p - a)), ac.dot(&(p - a)));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return (Feature::Vertex(0), [1.0, 0.0, 0.0]);
+    }
+    let (d3, d4) = (ab.dot(&(p - b)), ac.dot(&(p - b)));
+    if d3 >= 0.0 && d4 <= d3 {
+        return (Feature::Vertex(1), [0.0, 1.0, 0.0]);
+    }
+    let (d5, d6) = (ab.dot(&(p - c)), ac.dot(&(p - c)));
+    if d6 >= 0.0 && d5 <= d6 {
+        return (Feature::Vertex(2), [0.0, 0.0, 1.0]);
+    }
+    // Twice the signed areas of the sub-triangles opposite c, b and a, scaled by |w|.
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let t = d1 / (d1 - d3);
+        return (Feature::Edge(0), [1.0 - t, t, 0.0]);
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && d4 >= d3 && d5 >= d6 {
+        let t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return (Feature::Edge(1), [0.0, 1.0 - t, t]);
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let t = d2 / (d2 - d6);
+        return (Feature::Edge(2), [1.0 - t, 0.0, t]);
+    }
+    let sum = va + vb + vc;
+    (Feature::Face, [va / sum, vb / sum, vc / sum])
+}

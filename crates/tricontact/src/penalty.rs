@@ -1,0 +1,64 @@
+//! Penalty enforcement of the node–facet constraint.
+//!
+//! # Energy and sign convention
+//! The penalty energy of a penetrating pair is `Φ = ½ α P²` (applied by the caller only while the
+//! pair is active, normally when `P ≤ 0`). Its gradient is the **internal force** that enters the
+//! residual `r = f_int − f_ext` like an element's:
+//!
+//! ```text
+//! f_a = ∂Φ/∂x_a = α P ∂P/∂x_a = −α N_a P W          (a = i, j, k, l;  N_l = −1)
+//! ```
+//!
+//! The **resistance** of the formulation is the contact force acting on the nodes,
+//! `R_a = −f_a = α N_a P W`: for a penetrating slave node (`P < 0`, `N_l = −1`)
+//! `R_l = −α P W` pushes it back out along `W`, and the facet nodes are pushed the other way in
+//! proportion to their shape functions. `Σ_a R_a = 0` because `Σ_{i,j,k} N_a = 1 = −N_l`, and the
+//! moment `Σ x_a × R_a` vanishes because `Σ_{i,j,k} N_a x_a` is the projection of `x_l`, which
+//! differs from `x_l` only along `W`.
+//!
+//! # Consistent tangent
+//! ```text
+//! K = ∂f/∂x = α (∇P ⊗ ∇P + P ∇²P)                    (12×12, symmetric)
+//! ```
+
+use crate::error::GeometryError;
+use crate::linalg::{Mat12, Vec3, Vec12};
+use crate::node_facet::NodeFacet;
+
+/// Force and tangent of the penalty term of one node–facet pair.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PenaltyTerms {
+    /// The gap `P`.
+    pub gap: f64,
+    /// Internal force `f = α P ∇P` (the gradient of `½αP²`), stacked `[i, j, k, l]`.
+    pub force: Vec12,
+    /// Tangent `K = α(∇P⊗∇P + P∇²P)`.
+    pub stiffness: Mat12,
+}
+
+impl PenaltyTerms {
+    /// The resistance `R_a = α N_a P W` of the formulation: the contact force on node `a`,
+    /// `R = −f`.
+    #[must_use]
+    #[inline]
+    pub fn resistance(&self, a: usize) -> Vec3 {
+        -self.force.fixed_rows::<3>(3 * a).into_owned()
+    }
+}
+
+/// Penalty force and tangent for penalty factor `alpha` (force per length, the user's units).
+///
+/// # Errors
+/// [`GeometryError::Overflow`] if the tangent overflows.
+pub fn penalty(pair: &NodeFacet, alpha: f64) -> Result<PenaltyTerms, GeometryError> {
+    let gap = pair.gap();
+    let grad = pair.gap_gradient();
+    let mut stiffness = pair.gap_hessian()?;
+    stiffness *= alpha * gap;
+    stiffness.ger(alpha, &grad, &grad, 1.0);
+    Ok(PenaltyTerms {
+        gap,
+        force: grad * (alpha * gap),
+        stiffness,
+    })
+}
