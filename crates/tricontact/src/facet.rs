@@ -94,8 +94,8 @@ impl Facet {
                 GeometryError::NonFinite
             });
         }
-        // `!(a > b)` also catches a NaN produced by finite but overflowing intermediate values.
-        if !(w_norm > DEGENERACY_TOLERANCE * longest) || !(w_norm * w_norm).is_normal() {
+        // `|w|²` must stay a normal number: the shape-function gradients divide by it.
+        if w_norm <= DEGENERACY_TOLERANCE * longest || !(w_norm * w_norm).is_normal() {
             return Err(GeometryError::DegenerateFacet {
                 twice_area: w_norm,
                 longest_edge_squared: longest,

@@ -22,9 +22,19 @@ pub fn skew(a: &Vec3) -> Mat3 {
     Mat3::new(0.0, -a.z, a.y, a.z, 0.0, -a.x, -a.y, a.x, 0.0)
 }
 
-/// `true` when every entry is finite (one sum: NaN and ±∞ propagate into it).
+/// `true` when every entry is finite: NaN and ±∞ propagate into a sum (which may also overflow for
+/// finite entries near `f64::MAX`: those count as not finite). Four independent partial sums let the
+/// compiler vectorise the loop.
 #[must_use]
 #[inline]
 pub(crate) fn all_finite<const R: usize, const C: usize>(m: &SMatrix<f64, R, C>) -> bool {
-    m.iter().sum::<f64>().is_finite()
+    let mut acc = [0.0f64; 4];
+    let chunks = m.as_slice().chunks_exact(4);
+    let rest: f64 = chunks.remainder().iter().sum();
+    for chunk in chunks {
+        for (a, v) in acc.iter_mut().zip(chunk) {
+            *a += v;
+        }
+    }
+    (acc[0] + acc[1] + acc[2] + acc[3] + rest).is_finite()
 }

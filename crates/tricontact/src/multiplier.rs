@@ -19,7 +19,7 @@
 //! pull the bodies together (tension): the contact layer releases such a pair.
 
 use crate::error::GeometryError;
-use crate::linalg::{Mat12, Vec12};
+use crate::linalg::{Mat12, Vec12, all_finite};
 use crate::node_facet::NodeFacet;
 
 /// Constraint value, Jacobian row and geometric stiffness of one node–facet pair.
@@ -36,11 +36,16 @@ pub struct MultiplierTerms {
 /// Constraint, Jacobian and geometric stiffness for multiplier value `lambda`.
 ///
 /// # Errors
-/// [`GeometryError::Overflow`] if the Hessian overflows.
+/// [`GeometryError::Overflow`] if the geometric stiffness overflows (a non-finite `lambda`
+/// included).
 pub fn multiplier(pair: &NodeFacet, lambda: f64) -> Result<MultiplierTerms, GeometryError> {
+    let geometric_stiffness = pair.gap_hessian_unchecked() * lambda;
+    if !all_finite(&geometric_stiffness) {
+        return Err(GeometryError::Overflow);
+    }
     Ok(MultiplierTerms {
         constraint: pair.gap(),
         jacobian: pair.gap_gradient(),
-        geometric_stiffness: pair.gap_hessian()? * lambda,
+        geometric_stiffness,
     })
 }

@@ -179,6 +179,16 @@ impl NodeFacet {
     /// [`GeometryError::Overflow`] if an entry overflows (coordinates of wildly different
     /// magnitudes).
     pub fn gap_hessian(&self) -> Result<Mat12, GeometryError> {
+        let h = self.gap_hessian_unchecked();
+        if all_finite(&h) {
+            Ok(h)
+        } else {
+            Err(GeometryError::Overflow)
+        }
+    }
+
+    /// `∇²P` without the overflow check, for callers that check their own final result.
+    pub(crate) fn gap_hessian_unchecked(&self) -> Mat12 {
         let grad_n = self.shape_gradients();
         let normal = self.facet.normal();
         let projector = self.facet.normal_projector();
@@ -194,14 +204,10 @@ impl NodeFacet {
                 h.fixed_view_mut::<3, 3>(3 * a, 3 * b).copy_from(&block);
             }
         }
-        for b in 0..3 {
-            h.fixed_view_mut::<3, 3>(9, 3 * b).copy_from(&d_normal[b]);
+        for (b, dw) in d_normal.iter().enumerate() {
+            h.fixed_view_mut::<3, 3>(9, 3 * b).copy_from(dw);
         }
-        if all_finite(&h) {
-            Ok(h)
-        } else {
-            Err(GeometryError::Overflow)
-        }
+        h
     }
 
     /// `∇_b N_a` for `a ∈ {i, j, k}` and `b ∈ {i, j, k, l}` (see the module doc).

@@ -22,7 +22,7 @@
 //! ```
 
 use crate::error::GeometryError;
-use crate::linalg::{Mat12, Vec3, Vec12};
+use crate::linalg::{Mat12, Vec3, Vec12, all_finite};
 use crate::node_facet::NodeFacet;
 
 /// Force and tangent of the penalty term of one node–facet pair.
@@ -49,16 +49,20 @@ impl PenaltyTerms {
 /// Penalty force and tangent for penalty factor `alpha` (force per length, the user's units).
 ///
 /// # Errors
-/// [`GeometryError::Overflow`] if the tangent overflows.
+/// [`GeometryError::Overflow`] if the force or tangent overflows (a non-finite `alpha` included).
 pub fn penalty(pair: &NodeFacet, alpha: f64) -> Result<PenaltyTerms, GeometryError> {
     let gap = pair.gap();
     let grad = pair.gap_gradient();
-    let mut stiffness = pair.gap_hessian()?;
+    let mut stiffness = pair.gap_hessian_unchecked();
     stiffness *= alpha * gap;
     stiffness.ger(alpha, &grad, &grad, 1.0);
+    let force = grad * (alpha * gap);
+    if !(all_finite(&stiffness) && all_finite(&force)) {
+        return Err(GeometryError::Overflow);
+    }
     Ok(PenaltyTerms {
         gap,
-        force: grad * (alpha * gap),
+        force,
         stiffness,
     })
 }

@@ -26,7 +26,7 @@
 use nalgebra::{SMatrix, SVector};
 
 use crate::error::GeometryError;
-use crate::linalg::{Mat3, Vec3};
+use crate::linalg::{Mat3, Vec3, all_finite};
 
 /// Distance from a node to an edge's line with its derivatives over `[x_a, x_b, x_l]`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -47,7 +47,8 @@ pub struct PointEdge {
 ///
 /// # Errors
 /// [`GeometryError::NonFinite`] for non-finite input; [`GeometryError::DegenerateEdge`] when the
-/// edge ends coincide; [`GeometryError::ZeroDistance`] when the node lies on the line.
+/// edge ends coincide; [`GeometryError::ZeroDistance`] when the node lies on the line;
+/// [`GeometryError::Overflow`] for coordinates of wildly different magnitudes.
 pub fn point_edge(xa: &Vec3, xb: &Vec3, xl: &Vec3) -> Result<PointEdge, GeometryError> {
     let e = xb - xa;
     let r = xl - xa;
@@ -56,13 +57,13 @@ pub fn point_edge(xa: &Vec3, xb: &Vec3, xl: &Vec3) -> Result<PointEdge, Geometry
         return Err(GeometryError::NonFinite);
     }
     let scale2 = xa.norm_squared().max(xb.norm_squared());
-    if !(e2 > 1e-24 * scale2) || !e2.is_normal() {
+    if e2 <= 1e-24 * scale2 || !e2.is_normal() {
         return Err(GeometryError::DegenerateEdge { length_squared: e2 });
     }
     let t = r.dot(&e) / e2;
     let q = r - t * e;
     let distance = q.norm();
-    if !(distance > 1e-12 * e2.sqrt()) {
+    if distance.is_nan() || distance <= 1e-12 * e2.sqrt() {
         return Err(GeometryError::ZeroDistance { distance });
     }
     let n = q / distance;
@@ -91,6 +92,9 @@ pub fn point_edge(xa: &Vec3, xb: &Vec3, xl: &Vec3) -> Result<PointEdge, Geometry
                 .fixed_view_mut::<3, 3>(3 * a, 3 * c)
                 .copy_from(block);
         }
+    }
+    if !(all_finite(&gradient) && all_finite(&hessian)) {
+        return Err(GeometryError::Overflow);
     }
     Ok(PointEdge {
         distance,

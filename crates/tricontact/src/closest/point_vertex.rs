@@ -15,7 +15,7 @@
 use nalgebra::{SMatrix, SVector};
 
 use crate::error::GeometryError;
-use crate::linalg::{Mat3, Vec3};
+use crate::linalg::{Mat3, Vec3, all_finite};
 
 /// Distance from a node to a vertex with its derivatives over `[x_a, x_l]`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -34,7 +34,7 @@ pub struct PointVertex {
 ///
 /// # Errors
 /// [`GeometryError::NonFinite`] for non-finite input; [`GeometryError::ZeroDistance`] when the node
-/// sits on the vertex.
+/// sits on the vertex; [`GeometryError::Overflow`] for coordinates of wildly different magnitudes.
 pub fn point_vertex(xa: &Vec3, xl: &Vec3) -> Result<PointVertex, GeometryError> {
     let r = xl - xa;
     let distance = r.norm();
@@ -55,6 +55,9 @@ pub fn point_vertex(xa: &Vec3, xl: &Vec3) -> Result<PointVertex, GeometryError> 
     hessian.fixed_view_mut::<3, 3>(3, 3).copy_from(&h);
     hessian.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-h));
     hessian.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-h));
+    if !(all_finite(&gradient) && all_finite(&hessian)) {
+        return Err(GeometryError::Overflow);
+    }
     Ok(PointVertex {
         distance,
         direction,

@@ -1,0 +1,123 @@
+//! Closest-point queries: point–vertex and point–edge derivatives against finite differences, and
+//! the face/edge/vertex classification against an independent brute-force reference.
+
+mod common;
+
+use common::{CASES, REL_STEP, TOL, facet_size, fd_gradient, fd_jacobian, node, pair, rel_err};
+use nalgebra::SVector;
+use proptest::prelude::*;
+use tricontact::{Facet, Feature, Vec3, Vec12, closest_point, point_edge, point_vertex};
+
+type Vec6 = SVector<f64, 6>;
+type Vec9 = SVector<f64, 9>;
+
+/// Coordinates of nodes `first..first + N/3` of a stacked pair… picked by index.
+fn pick<const N: usize>(x: &Vec12, nodes: &[usize]) -> SVector<f64, N> {
+    SVector::from_fn(|r, _| x[3 * nodes[r / 3] + r % 3])
+}
+
+/// Distance from `p` to segment `(a, b)`.
+fn segment_distance(a: &Vec3, b: &Vec3, p: &Vec3) -> f64 {
+    let e = b - a;
+    let t = ((p - a).dot(&e) / e.norm_squared()).clamp(0.0, 1.0);
+    (p - (a + t * e)).norm()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(CASES))]
+
+    #[test]
+    fn point_vertex_derivatives(x in pair()) {
+        let y: Vec6 = pick(&x, &[0, 3]);
+        let size = facet_size(&x);
+        prop_assume!((node(&x, 3) - node(&x, 0)).norm() > 0.05 * size);
+        let f = |z: &Vec6| point_vertex(&common::node(z, 0), &common::node(z, 1)).unwrap();
+        let h = REL_STEP * size;
+        let exact = f(&y);
+        prop_assert!(rel_err(&fd_gradient(|z| f(z).distance, &y, h), &exact.gradient) <= TOL);
+        let err = rel_err(&fd_jacobian(|z| f(z).gradient, &y, h), &exact.hessian);
+        prop_assert!(err <= TOL, "Hessian relative error {err:e}");
+        prop_assert!(rel_err(&exact.hessian.transpose(), &exact.hessian) <= 1e-12);
+    }
+
+    #[test]
+    fn point_edge_derivatives(x in pair()) {
+        let y: Vec9 = pick(&x, &[0, 1, 3]);
+        let size = facet_size(&x);
+        let f = |z: &Vec9| point_edge(&common::node(z, 0), &common::node(z, 1), &common::node(z, 2));
+        let exact = f(&y).unwrap();
+        prop_assume!(exact.distance > 0.05 * size);
+        let h = REL_STEP * size;
+        let fd = fd_gradient(|z| f(z).unwrap().distance, &y, h);
+        prop_assert!(rel_err(&fd, &exact.gradient) <= TOL);
+        let fd = fd_jacobian(|z| f(z).unwrap().gradient, &y, h);
+        let err = rel_err(&fd, &exact.hessian);
+        prop_assert!(err <= TOL, "Hessian relative error {err:e}");
+        prop_assert!(rel_err(&exact.hessian.transpose(), &exact.hessian) <= 1e-12);
+        // The foot of the perpendicular is the closest point of the line.
+        let (a, b, p) = (node(&x, 0), node(&x, 1), node(&x, 3));
+        let foot = a + exact.parameter * (b - a);
+        prop_assert!(((p - foot).norm() - exact.distance).abs() <= 1e-12 * size.max(p.norm()));
+        prop_assert!(exact.direction.dot(&(b - a)).abs() <= 1e-10 * size);
+    }
+
+    #[test]
+    fn closest_point_matches_brute_force(x in pair()) {
+        let (a, b, c, p) = (node(&x, 0), node(&x, 1), node(&x, 2), node(&x, 3));
+        let facet = Facet::new(a, b, c).unwrap();
+        let cp = closest_point(&facet, &p);
+        let proj = tricontact::project(&facet, &p).unwrap();
+        let reference = if proj.is_inside(0.0) {
+            proj.gap.abs()
+        } else {
+            segment_distance(&a, &b, &p).min(segment_distance(&b, &c, &p)).min(segment_distance(&c, &a, &p))
+        };
+        let size = facet_size(&x);
+        let tol = 1e-10 * size.max(p.norm());
+        prop_assert!((cp.distance - reference).abs() <= tol, "{} vs {}", cp.distance, reference);
+        prop_assert!((cp.barycentric.iter().sum::<f64>() - 1.0).abs() <= 1e-12);
+        prop_assert!(cp.barycentric.iter().all(|&n| (0.0..=1.0).contains(&n)));
+        // The feature agrees with the kernel's own measure of distance to it.
+        let on = |k: usize| node(&x, k);
+        let feature_distance = match cp.feature {
+            Feature::Face => proj.gap.abs(),
+            Feature::Edge(e) => point_edge(&on(e), &on((e + 1) % 3), &p).map_or(0.0, |pe| pe.distance),
+            Feature::Vertex(v) => (p - on(v)).norm(),
+        };
+        prop_assert!((feature_distance - cp.distance).abs() <= tol);
+        // Barycentric coordinates vanish off the feature.
+        for k in 0..3 {
+            if !cp.feature.nodes().contains(&k) {
+                prop_assert_eq!(cp.barycentric[k], 0.0);
+            }
+        }
+    }
+}
+
+#[test]
+fn nodes_on_vertices_and_edges_get_lower_dimensional_features() {
+    let facet = Facet::new(
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(2.0, 0.0, 0.0),
+        Vec3::new(0.0, 2.0, 0.0),
+    )
+    .unwrap();
+    let cases = [
+        (Vec3::new(0.0, 0.0, 0.0), Feature::Vertex(0)),
+        (Vec3::new(2.0, 0.0, 0.5), Feature::Vertex(1)),
+        (Vec3::new(0.0, 2.0, -0.5), Feature::Vertex(2)),
+        (Vec3::new(1.0, 0.0, 0.0), Feature::Edge(0)),
+        (Vec3::new(1.0, 1.0, 0.3), Feature::Edge(1)),
+        (Vec3::new(0.0, 0.5, 0.0), Feature::Edge(2)),
+        (Vec3::new(1.0, -1.0, 0.0), Feature::Edge(0)),
+        (Vec3::new(-1.0, -1.0, 0.0), Feature::Vertex(0)),
+        (Vec3::new(0.5, 0.5, -0.2), Feature::Face),
+    ];
+    for (p, expected) in cases {
+        let cp = closest_point(&facet, &p);
+        assert_eq!(cp.feature, expected, "node {p:?}");
+    }
+    let cp = closest_point(&facet, &Vec3::new(1.0, -1.0, 0.0));
+    assert!((cp.distance - 1.0).abs() < 1e-15);
+    assert_eq!(cp.barycentric, [0.5, 0.5, 0.0]);
+}
