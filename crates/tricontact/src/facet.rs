@@ -165,6 +165,14 @@ impl Facet {
         self.normal.cross(&self.opposite_edge(a))
     }
 
+    /// `G_a = n_a/|w|`: the gradient of shape function `N_a` with respect to the slave node, an
+    /// in-plane vector of length `1/h_a` (`h_a` the facet height over the edge opposite `a`).
+    #[must_use]
+    #[inline]
+    pub fn shape_gradient(&self, a: usize) -> Vec3 {
+        self.w.cross(&self.opposite_edge(a)) * (1.0 / (self.w_norm * self.w_norm))
+    }
+
     /// `∂w/∂x_a = [e_a]×`.
     #[must_use]
     #[inline]
@@ -176,14 +184,8 @@ impl Facet {
     #[must_use]
     #[inline]
     pub fn d_normal(&self, a: usize) -> Mat3 {
-        self.normal_projector() * self.d_area_normal(a)
-    }
-
-    /// `(I − W⊗W)/|w|`, the factor shared by every `∂W/∂x_a`.
-    #[must_use]
-    #[inline]
-    pub(crate) fn normal_projector(&self) -> Mat3 {
         (Mat3::identity() - self.normal * self.normal.transpose()) / self.w_norm
+            * self.d_area_normal(a)
     }
 
     /// The local triad `(U, V, W)`.

@@ -26,29 +26,30 @@
 //! hence `P`, unchanged; moving it along `W` shifts the plane under the slave node by `N_a`.
 //!
 //! # Hessian
-//! Differentiating `g_a = −N_a W` once more:
+//! Two identities make the second derivatives short. Let `G_a = n_a/|w|` (`= ∂N_a/∂x_l`, in-plane,
+//! `Σ G_a = 0`), and extend both lists to the slave node with `N_l = −1`, `G_l = 0`.
+//!
+//! 1. The seed's `∂W/∂x_b = (I − W⊗W)[e_b]×/|w|` is rank one: `[e_b]×` maps an in-plane vector to a
+//!    multiple of `W`, which the projector removes, and maps `W` to `e_b × W = −n_b`. Hence
+//!    `∂W/∂x_b = −G_b ⊗ W`: only the normal component of a node's motion tilts the facet.
+//! 2. `∇_b N_a = −N_b G_a + P (G_a·G_b) W`. Moving facet node `b` in-plane by `δ` leaves the plane and
+//!    the projected point `p = x_l − P W` in place; differentiating `Σ N_c x_c = p`, `Σ N_c = 1` gives
+//!    `δN_a = −N_b G_a·δ`. Moving it along `W` by `ε` tilts `W` by `−ε G_b` and shifts `P` by `−ε N_b`, so
+//!    `p` moves in-plane by `ε P G_b`, and `δN_a = ε P G_a·G_b` (the tilted triangle projects onto the
+//!    old one unchanged to first order). For `b = l`, `∇_l N_a = G_a`, which the same formula gives.
+//!
+//! Differentiating `g_a = −N_a W` with both identities,
 //!
 //! ```text
-//! ∂²P/∂x_a∂x_b = −W ⊗ ∇_b N_a − N_a ∂W/∂x_b      (∂W/∂x_l = 0, ∇N_l = 0)
+//! ∂²P/∂x_a∂x_b = N_b W⊗G_a + N_a G_b⊗W − P (G_a·G_b) W⊗W        (a, b = i, j, k, l)
 //! ```
 //!
-//! For `∇N_a`, write `N_a = (w · m_a)/|w|²` with `m_a` the area vector of the sub-triangle
-//! obtained by replacing node `a` by the slave node: `m_i = (x_k − x_j) × (x_l − x_j)` on
-//! `(j, k, l)`, `m_j` on `(k, i, l)`, `m_k` on `(i, j, l)`. For a triangle `(p, q, s)`,
-//! `∂m/∂x_p = [x_s − x_q]×`, `∂m/∂x_q = [x_p − x_s]×`, `∂m/∂x_s = [x_q − x_p]×` (the seed's edge
-//! rule, applied to the sub-triangle). Hence, with `∂w/∂x_b = [e_b]×` (`e_l = 0`) and
-//! `∂m_a/∂x_b = [c_ab]×`,
-//!
-//! ```text
-//! ∇_b N_a = ((m_a − 2 N_a w) × e_b + w × c_ab) / |w|²
-//! ```
-//!
-//! The Hessian is symmetric (it is a second derivative); the tests check that and compare every entry
-//! with central finite differences of the gradient.
+//! which is visibly symmetric. The tests compare every entry, and `∇N_a`, with central finite
+//! differences.
 
 use crate::error::GeometryError;
 use crate::facet::Facet;
-use crate::linalg::{Mat3, Mat12, Vec3, Vec12, all_finite};
+use crate::linalg::{Mat12, Vec3, Vec12, all_finite};
 
 /// Gap and shape functions of a slave node against a facet: everything contact detection needs.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -95,12 +96,11 @@ pub struct NodeFacet {
 #[inline]
 pub fn project(facet: &Facet, xl: &Vec3) -> Result<Projection, GeometryError> {
     let [xi, xj, xk] = facet.nodes();
-    let inv = 1.0 / facet.twice_area();
     let gap = (xl - xi).dot(&facet.normal());
     let shape = [
-        (xl - xj).dot(&facet.inner_edge_normal(0)) * inv,
-        (xl - xk).dot(&facet.inner_edge_normal(1)) * inv,
-        (xl - xi).dot(&facet.inner_edge_normal(2)) * inv,
+        (xl - xj).dot(&facet.shape_gradient(0)),
+        (xl - xk).dot(&facet.shape_gradient(1)),
+        (xl - xi).dot(&facet.shape_gradient(2)),
     ];
     if (gap + shape[0] + shape[1] + shape[2]).is_finite() {
         Ok(Projection { gap, shape })
@@ -189,47 +189,49 @@ impl NodeFacet {
 
     /// `∇²P` without the overflow check, for callers that check their own final result.
     pub(crate) fn gap_hessian_unchecked(&self) -> Mat12 {
-        let grad_n = self.shape_gradients();
         let normal = self.facet.normal();
-        let projector = self.facet.normal_projector();
-        let d_normal: [Mat3; 3] = std::array::from_fn(|b| projector * self.facet.d_area_normal(b));
         let shape = self.shape4();
+        let g = self.in_plane_gradients();
+        let ww = normal * normal.transpose();
         let mut h = Mat12::zeros();
-        for a in 0..3 {
-            for b in 0..4 {
-                let mut block = -normal * grad_n[a][b].transpose();
-                if b < 3 {
-                    block -= shape[a] * d_normal[b];
-                }
+        for a in 0..4 {
+            // W⊗G_a and G_a⊗W, reused by every block of row a.
+            let wg = normal * g[a].transpose();
+            for b in a..4 {
+                let gw = g[b] * normal.transpose();
+                let block = shape[b] * wg + shape[a] * gw - self.gap() * g[a].dot(&g[b]) * ww;
                 h.fixed_view_mut::<3, 3>(3 * a, 3 * b).copy_from(&block);
+                if b != a {
+                    h.fixed_view_mut::<3, 3>(3 * b, 3 * a)
+                        .copy_from(&block.transpose());
+                }
             }
-        }
-        for (b, dw) in d_normal.iter().enumerate() {
-            h.fixed_view_mut::<3, 3>(9, 3 * b).copy_from(dw);
         }
         h
     }
 
-    /// `∇_b N_a` for `a ∈ {i, j, k}` and `b ∈ {i, j, k, l}` (see the module doc).
+    /// `G_a = n_a/|w| = ∂N_a/∂x_l` for `a = i, j, k`, and `G_l = 0`.
+    #[must_use]
+    #[inline]
+    pub fn in_plane_gradients(&self) -> [Vec3; 4] {
+        let f = &self.facet;
+        [
+            f.shape_gradient(0),
+            f.shape_gradient(1),
+            f.shape_gradient(2),
+            Vec3::zeros(),
+        ]
+    }
+
+    /// `∇_b N_a = −N_b G_a + P (G_a·G_b) W` for `a ∈ {i, j, k}` and `b ∈ {i, j, k, l}` (see the
+    /// module doc).
     #[must_use]
     pub fn shape_gradients(&self) -> [[Vec3; 4]; 3] {
-        let [xi, xj, xk] = *self.facet.nodes();
-        let xl = self.node;
-        let w = self.facet.area_normal();
-        let inv_w2 = 1.0 / (self.facet.twice_area() * self.facet.twice_area());
-        // Sub-triangles (p, q, s) with node a replaced by the slave node.
-        let tri = [(xj, xk), (xk, xi), (xi, xj)];
-        let edges = [xk - xj, xi - xk, xj - xi, Vec3::zeros()];
+        let shape = self.shape4();
+        let g = self.in_plane_gradients();
+        let normal = self.facet.normal();
         std::array::from_fn(|a| {
-            let (p, q) = tri[a];
-            let m = (q - p).cross(&(xl - p));
-            let base = m - 2.0 * self.projection.shape[a] * w;
-            // c_ab: ∂m_a/∂x_b = [c_ab]×, indexed by the global node b.
-            let mut c = [Vec3::zeros(); 4];
-            c[(a + 1) % 3] = xl - q; // b = p: [x_s − x_q]×
-            c[(a + 2) % 3] = p - xl; // b = q: [x_p − x_s]×
-            c[3] = q - p; // b = s = l: [x_q − x_p]×
-            std::array::from_fn(|b| (base.cross(&edges[b]) + w.cross(&c[b])) * inv_w2)
+            std::array::from_fn(|b| -shape[b] * g[a] + self.gap() * g[a].dot(&g[b]) * normal)
         })
     }
 }

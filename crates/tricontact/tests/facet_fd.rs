@@ -81,3 +81,32 @@ proptest! {
         prop_assert!((t.u.cross(&t.v) + t.w).norm() < 1e-12);
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(CASES))]
+
+    /// The identity the Hessian of the gap relies on: `∂W/∂x_b = −G_b ⊗ W`.
+    #[test]
+    fn normal_derivative_is_rank_one(x in pair()) {
+        let f = facet(&facet_coords(&x));
+        for b in 0..3 {
+            let rank_one = -f.shape_gradient(b) * f.normal().transpose();
+            prop_assert!(rel_err(&rank_one, &f.d_normal(b)) <= 1e-10);
+        }
+    }
+
+    /// `G_a = ∂N_a/∂x_l`, and the three sum to zero.
+    #[test]
+    fn shape_gradient_is_slave_derivative(x in pair()) {
+        let f = facet(&facet_coords(&x));
+        let h = REL_STEP * facet_size(&x);
+        let xl: SVector<f64, 3> = x.fixed_rows::<3>(9).into_owned();
+        let fd = fd_jacobian(|y| SVector::<f64, 3>::from(tricontact::project(&f, y).unwrap().shape), &xl, h);
+        for a in 0..3 {
+            let approx = fd.row(a).transpose();
+            prop_assert!((approx - f.shape_gradient(a)).amax() * facet_size(&x) <= TOL);
+        }
+        let sum = f.shape_gradient(0) + f.shape_gradient(1) + f.shape_gradient(2);
+        prop_assert!(sum.norm() * facet_size(&x) <= 1e-12);
+    }
+}
