@@ -45,6 +45,8 @@ pub struct Facet {
     x: [Vec3; 3],
     w: Vec3,
     w_norm: f64,
+    /// `1/|w|²`, shared by the shape-function gradients.
+    inv_w2: f64,
     normal: Vec3,
 }
 
@@ -101,11 +103,13 @@ impl Facet {
                 longest_edge_squared: longest,
             });
         }
+        let inv = 1.0 / w_norm;
         Ok(Self {
             x: [xi, xj, xk],
             w,
             w_norm,
-            normal: w / w_norm,
+            inv_w2: inv * inv,
+            normal: w * inv,
         })
     }
 
@@ -170,7 +174,7 @@ impl Facet {
     #[must_use]
     #[inline]
     pub fn shape_gradient(&self, a: usize) -> Vec3 {
-        self.w.cross(&self.opposite_edge(a)) * (1.0 / (self.w_norm * self.w_norm))
+        self.w.cross(&self.opposite_edge(a)) * self.inv_w2
     }
 
     /// `∂w/∂x_a = [e_a]×`.

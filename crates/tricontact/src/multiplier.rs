@@ -39,7 +39,7 @@ pub struct MultiplierTerms {
 /// [`GeometryError::Overflow`] if the geometric stiffness overflows (a non-finite `lambda`
 /// included).
 pub fn multiplier(pair: &NodeFacet, lambda: f64) -> Result<MultiplierTerms, GeometryError> {
-    let geometric_stiffness = pair.gap_hessian_unchecked() * lambda;
+    let geometric_stiffness = pair.second_order(0.0, lambda);
     if !all_finite(&geometric_stiffness) {
         return Err(GeometryError::Overflow);
     }

@@ -86,6 +86,8 @@ pub struct NodeFacet {
     pub node: Vec3,
     /// Gap and shape functions.
     pub projection: Projection,
+    /// `G_a = ∂N_a/∂x_l` for `a = i, j, k` (see [`Facet::shape_gradient`]).
+    pub gradients: [Vec3; 3],
 }
 
 /// Gap and shape functions of node `xl` against `facet` (the detection step).
@@ -95,12 +97,19 @@ pub struct NodeFacet {
 /// overflows.
 #[inline]
 pub fn project(facet: &Facet, xl: &Vec3) -> Result<Projection, GeometryError> {
+    let gradients = std::array::from_fn(|a| facet.shape_gradient(a));
+    project_with(facet, xl, &gradients)
+}
+
+/// [`project`] given the shape-function gradients `G_a` of the facet.
+#[inline]
+fn project_with(facet: &Facet, xl: &Vec3, g: &[Vec3; 3]) -> Result<Projection, GeometryError> {
     let [xi, xj, xk] = facet.nodes();
     let gap = (xl - xi).dot(&facet.normal());
     let shape = [
-        (xl - xj).dot(&facet.shape_gradient(0)),
-        (xl - xk).dot(&facet.shape_gradient(1)),
-        (xl - xi).dot(&facet.shape_gradient(2)),
+        (xl - xj).dot(&g[0]),
+        (xl - xk).dot(&g[1]),
+        (xl - xi).dot(&g[2]),
     ];
     if (gap + shape[0] + shape[1] + shape[2]).is_finite() {
         Ok(Projection { gap, shape })
@@ -128,11 +137,13 @@ impl NodeFacet {
     #[inline]
     pub fn new(xi: Vec3, xj: Vec3, xk: Vec3, xl: Vec3) -> Result<Self, GeometryError> {
         let facet = Facet::new(xi, xj, xk)?;
-        let projection = project(&facet, &xl)?;
+        let gradients = std::array::from_fn(|a| facet.shape_gradient(a));
+        let projection = project_with(&facet, &xl, &gradients)?;
         Ok(Self {
             facet,
             node: xl,
             projection,
+            gradients,
         })
     }
 
@@ -188,39 +199,53 @@ impl NodeFacet {
     }
 
     /// `∇²P` without the overflow check, for callers that check their own final result.
+    #[inline]
     pub(crate) fn gap_hessian_unchecked(&self) -> Mat12 {
-        let normal = self.facet.normal();
-        let shape = self.shape4();
+        self.second_order(0.0, 1.0)
+    }
+
+    /// `α ∇P⊗∇P + β ∇²P`, the one formula behind the Hessian (`α = 0, β = 1`), the penalty tangent
+    /// (`α, β = αP`) and the geometric stiffness (`0, λ`). Block `(a, b)` is
+    ///
+    /// ```text
+    /// W ⊗ [(α N_a N_b − β P G_a·G_b) W + β N_b G_a] + β N_a G_b ⊗ W
+    /// ```
+    ///
+    /// Column `(b, s)` of the result is `W_s X_b + β N_b Y_s` with the 12-vectors
+    /// `X_b = [c_ab W + β N_a G_b]_a` (`c_ab = α N_a N_b − β P G_a·G_b`) and `Y_s = [G_a,s W]_a`,
+    /// which keeps the work in short vector loops.
+    pub(crate) fn second_order(&self, alpha: f64, beta: f64) -> Mat12 {
+        let w = self.facet.normal();
+        let n = self.shape4();
         let g = self.in_plane_gradients();
-        let ww = normal * normal.transpose();
-        let mut h = Mat12::zeros();
+        let p = self.gap();
+        let mut x = [Vec12::zeros(); 4];
+        let mut y = [Vec12::zeros(); 3];
         for a in 0..4 {
-            // W⊗G_a and G_a⊗W, reused by every block of row a.
-            let wg = normal * g[a].transpose();
-            for b in a..4 {
-                let gw = g[b] * normal.transpose();
-                let block = shape[b] * wg + shape[a] * gw - self.gap() * g[a].dot(&g[b]) * ww;
-                h.fixed_view_mut::<3, 3>(3 * a, 3 * b).copy_from(&block);
-                if b != a {
-                    h.fixed_view_mut::<3, 3>(3 * b, 3 * a)
-                        .copy_from(&block.transpose());
-                }
+            for (b, xb) in x.iter_mut().enumerate() {
+                let c = alpha * n[a] * n[b] - beta * p * g[a].dot(&g[b]);
+                xb.fixed_rows_mut::<3>(3 * a)
+                    .copy_from(&(c * w + (beta * n[a]) * g[b]));
+            }
+            for (s, ys) in y.iter_mut().enumerate() {
+                ys.fixed_rows_mut::<3>(3 * a).copy_from(&(g[a][s] * w));
             }
         }
-        h
+        let mut k = Mat12::zeros();
+        for b in 0..4 {
+            for s in 0..3 {
+                k.set_column(3 * b + s, &(w[s] * x[b] + (beta * n[b]) * y[s]));
+            }
+        }
+        k
     }
 
     /// `G_a = n_a/|w| = ∂N_a/∂x_l` for `a = i, j, k`, and `G_l = 0`.
     #[must_use]
     #[inline]
     pub fn in_plane_gradients(&self) -> [Vec3; 4] {
-        let f = &self.facet;
-        [
-            f.shape_gradient(0),
-            f.shape_gradient(1),
-            f.shape_gradient(2),
-            Vec3::zeros(),
-        ]
+        let [gi, gj, gk] = self.gradients;
+        [gi, gj, gk, Vec3::zeros()]
     }
 
     /// `∇_b N_a = −N_b G_a + P (G_a·G_b) W` for `a ∈ {i, j, k}` and `b ∈ {i, j, k, l}` (see the

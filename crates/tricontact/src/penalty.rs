@@ -53,9 +53,7 @@ impl PenaltyTerms {
 pub fn penalty(pair: &NodeFacet, alpha: f64) -> Result<PenaltyTerms, GeometryError> {
     let gap = pair.gap();
     let grad = pair.gap_gradient();
-    let mut stiffness = pair.gap_hessian_unchecked();
-    stiffness *= alpha * gap;
-    stiffness.ger(alpha, &grad, &grad, 1.0);
+    let stiffness = pair.second_order(alpha, alpha * gap);
     let force = grad * (alpha * gap);
     if !(all_finite(&stiffness) && all_finite(&force)) {
         return Err(GeometryError::Overflow);

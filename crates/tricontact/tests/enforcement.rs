@@ -2,7 +2,9 @@
 
 mod common;
 
-use common::{CASES, REL_STEP, TOL, facet_size, fd_gradient, fd_jacobian, node, pair, rel_err};
+use common::{
+    CASES, REL_STEP, TOL, facet_size, fd_gradient, fd_jacobian, node, pair, rel_err, rel_err_floor,
+};
 use nalgebra::{Rotation3, Unit};
 use proptest::prelude::*;
 use tricontact::{Mat12, NodeFacet, Vec3, Vec12, multiplier, penalty};
@@ -50,7 +52,9 @@ proptest! {
         let h = REL_STEP * facet_size(&x);
         let fd = fd_gradient(|y| 0.5 * a * pair_at(y).gap().powi(2), &x, h);
         let exact = penalty(&pair_at(&x), a).unwrap().force;
-        prop_assert!(rel_err(&fd, &exact) <= TOL);
+        // Force scale: the force at a gap of one facet size.
+        let err = rel_err_floor(&fd, &exact, a * facet_size(&x));
+        prop_assert!(err <= TOL, "relative error {err:e}");
     }
 
     #[test]
@@ -59,7 +63,8 @@ proptest! {
         let h = REL_STEP * facet_size(&x);
         let fd = fd_jacobian(|y| penalty(&pair_at(y), a).unwrap().force, &x, h);
         let exact = penalty(&pair_at(&x), a).unwrap().stiffness;
-        let err = rel_err(&fd, &exact);
+        // Stiffness scale: α.
+        let err = rel_err_floor(&fd, &exact, a);
         prop_assert!(err <= TOL, "relative error {err:e}");
         prop_assert!(rel_err(&exact.transpose(), &exact) <= 1e-12);
     }
@@ -121,7 +126,8 @@ proptest! {
         let fd = fd_gradient(|y| multiplier(&pair_at(y), lambda).unwrap().constraint, &x, h);
         prop_assert!(rel_err(&fd, &terms.jacobian) <= TOL);
         let fd = fd_jacobian(|y| multiplier(&pair_at(y), lambda).unwrap().jacobian * lambda, &x, h);
-        let err = rel_err(&fd, &terms.geometric_stiffness);
+        // Scale of λ∇²P: |λ|/size.
+        let err = rel_err_floor(&fd, &terms.geometric_stiffness, lambda.abs() / facet_size(&x));
         prop_assert!(err <= TOL, "relative error {err:e}");
         let k = terms.geometric_stiffness;
         prop_assert!(rel_err(&k.transpose(), &k) <= 1e-12);

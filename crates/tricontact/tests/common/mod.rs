@@ -99,7 +99,17 @@ pub fn rel_err<const M: usize, const N: usize>(
     approx: &SMatrix<f64, M, N>,
     exact: &SMatrix<f64, M, N>,
 ) -> f64 {
+    rel_err_floor(approx, exact, 0.0)
+}
+
+/// `max |approx − exact| / max(max |exact|, floor)`: relative to the result, or to the natural
+/// scale `floor` of the quantity when the result itself is nearly zero (a force at a tiny gap).
+pub fn rel_err_floor<const M: usize, const N: usize>(
+    approx: &SMatrix<f64, M, N>,
+    exact: &SMatrix<f64, M, N>,
+    floor: f64,
+) -> f64 {
     let diff = (approx - exact).amax();
-    let scale = exact.amax();
+    let scale = exact.amax().max(floor);
     if scale > 0.0 { diff / scale } else { diff }
 }
