@@ -33,7 +33,10 @@ fn main() -> Result<(), tricontact::GeometryError> {
     let terms = penalty(&pair, alpha)?;
     let n = pair.projection.shape;
     let w = pair.facet.normal();
-    println!("facet normal W            = [{:.6}, {:.6}, {:.6}]", w.x, w.y, w.z);
+    println!(
+        "facet normal W            = [{:.6}, {:.6}, {:.6}]",
+        w.x, w.y, w.z
+    );
     println!("gap P                     = {:.6}", pair.gap());
     println!(
         "shape functions N_i,j,k   = [{:.6}, {:.6}, {:.6}]  (sum {:.12})",
@@ -43,11 +46,20 @@ fn main() -> Result<(), tricontact::GeometryError> {
         n.iter().sum::<f64>()
     );
     let r = terms.resistance(3);
-    println!("resistance R_l (slave)    = [{:.6}, {:.6}, {:.6}]", r.x, r.y, r.z);
+    println!(
+        "resistance R_l (slave)    = [{:.6}, {:.6}, {:.6}]",
+        r.x, r.y, r.z
+    );
     let r = terms.resistance(0) + terms.resistance(1) + terms.resistance(2);
-    println!("resistance R_i + R_j + R_k = [{:.6}, {:.6}, {:.6}]", r.x, r.y, r.z);
+    println!(
+        "resistance R_i + R_j + R_k = [{:.6}, {:.6}, {:.6}]",
+        r.x, r.y, r.z
+    );
     let k = terms.stiffness;
-    println!("tangent symmetric         : |K - Kᵀ| = {:.1e}", (k - k.transpose()).amax());
+    println!(
+        "tangent symmetric         : |K - Kᵀ| = {:.1e}",
+        (k - k.transpose()).amax()
+    );
 
     // Central differences of the force, step 1e-6 of the facet size.
     let mut x = Vec12::zeros();
