@@ -8,7 +8,9 @@
 //! * [`penalty`]: the penalty force `αP∇P` (resistance `R_a = αN_aPW`) and tangent;
 //! * [`multiplier`]: the constraint `c = P`, its Jacobian and geometric stiffness `λ∇²c`;
 //! * [`closest`]: closest points near facet boundaries (face / edge / vertex), point–edge and
-//!   point–vertex distances with derivatives.
+//!   point–vertex distances with derivatives;
+//! * [`search`]: which facet each slave node meets, in meshes of millions of facets (BVH,
+//!   incremental walk, parallel queries).
 //!
 //! Coordinates of a node–facet pair are stacked `[x_i, x_j, x_k, x_l]` (12 entries). No function
 //! panics or returns NaN for finite input: degenerate geometry is a [`GeometryError`].
@@ -35,9 +37,11 @@ pub mod linalg;
 pub mod multiplier;
 pub mod node_facet;
 pub mod penalty;
+pub mod search;
 
 pub use closest::{
-    ClosestPoint, Feature, PointEdge, PointVertex, closest_point, point_edge, point_vertex,
+    ClosestPoint, Feature, PointEdge, PointVertex, closest_point, closest_point_on_triangle,
+    point_edge, point_vertex,
 };
 pub use error::GeometryError;
 pub use facet::{DEGENERACY_TOLERANCE, Facet, Triad, TriadDerivative};

@@ -9,5 +9,5 @@ pub mod point_triangle;
 pub mod point_vertex;
 
 pub use point_edge::{PointEdge, point_edge};
-pub use point_triangle::{ClosestPoint, Feature, closest_point};
+pub use point_triangle::{ClosestPoint, Feature, closest_point, closest_point_on_triangle};
 pub use point_vertex::{PointVertex, point_vertex};

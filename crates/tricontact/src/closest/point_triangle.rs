@@ -54,10 +54,21 @@ pub struct ClosestPoint {
 
 /// The closest point of `facet` to node `p`, with its feature.
 #[must_use]
+#[inline]
 pub fn closest_point(facet: &Facet, p: &Vec3) -> ClosestPoint {
-    let (feature, barycentric) = region(facet, p);
-    let [xa, xb, xc] = facet.nodes();
-    let point = xa * barycentric[0] + xb * barycentric[1] + xc * barycentric[2];
+    let [a, b, c] = facet.nodes();
+    closest_point_on_triangle(a, b, c, p)
+}
+
+/// The closest point of the triangle `(a, b, c)` to node `p`, with its feature, without building a
+/// [`Facet`]: the form the contact search calls on every candidate. For a degenerate triangle the
+/// result is still a closest point (of the segment or point it collapses to); the search skips such
+/// facets before it gets here.
+#[must_use]
+#[inline]
+pub fn closest_point_on_triangle(a: &Vec3, b: &Vec3, c: &Vec3, p: &Vec3) -> ClosestPoint {
+    let (feature, barycentric) = region(a, b, c, p);
+    let point = a * barycentric[0] + b * barycentric[1] + c * barycentric[2];
     ClosestPoint {
         feature,
         barycentric,
@@ -67,8 +78,8 @@ pub fn closest_point(facet: &Facet, p: &Vec3) -> ClosestPoint {
 }
 
 /// The Voronoi region of `p` and the barycentric coordinates of its closest point.
-fn region(facet: &Facet, p: &Vec3) -> (Feature, [f64; 3]) {
-    let [a, b, c] = facet.nodes();
+#[inline]
+fn region(a: &Vec3, b: &Vec3, c: &Vec3, p: &Vec3) -> (Feature, [f64; 3]) {
     let (ab, ac) = (b - a, c - a);
     let (d1, d2) = (ab.dot(&(p - a)), ac.dot(&(p - a)));
     if d1 <= 0.0 && d2 <= 0.0 {
@@ -98,6 +109,6 @@ fn region(facet: &Facet, p: &Vec3) -> (Feature, [f64; 3]) {
         let t = d2 / (d2 - d6);
         return (Feature::Edge(2), [1.0 - t, 0.0, t]);
     }
-    let sum = va + vb + vc;
-    (Feature::Face, [va / sum, vb / sum, vc / sum])
+    let inv = 1.0 / (va + vb + vc);
+    (Feature::Face, [va * inv, vb * inv, vc * inv])
 }

@@ -1,0 +1,24 @@
+//! Contact search: which facet of a master surface is closest to each slave node.
+//!
+//! * [`surface`]: facets as node triples, with facet adjacency;
+//! * [`aabb`], [`morton`]: boxes and Z-order codes;
+//! * [`bvh`]: the bounding-volume hierarchy (parallel build, refit, rebuild on degraded quality);
+//! * [`query`]: closest facet and facets within a distance, parallel over nodes, deterministic;
+//! * [`incremental`]: the neighbourhood walk from last increment's facet, with tree fallback.
+//!
+//! The search uses the kernel's closest-point query, so each answer says whether the node faces the
+//! interior, an edge or a vertex of its facet.
+
+pub mod aabb;
+pub mod bvh;
+pub mod incremental;
+pub mod morton;
+pub mod query;
+pub mod scenes;
+pub mod surface;
+
+pub use aabb::Aabb;
+pub use bvh::{Bvh, LEAF_SIZE, REBUILD_RATIO, Update};
+pub use incremental::{IncrementalStats, MAX_STEPS};
+pub use query::{Hit, Query, brute_force_closest, measure, sort_hits};
+pub use surface::{Surface, SurfaceError};

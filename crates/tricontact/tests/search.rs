@@ -1,0 +1,282 @@
+//! The contact search against brute force: random and structured scenes, ties on shared edges and
+//! vertices, degenerate facets, self-contact exclusion, refit/rebuild, incremental walk, threads.
+
+use proptest::prelude::*;
+use tricontact::Vec3;
+use tricontact::search::scenes::{grid, torus};
+use tricontact::search::{
+    Bvh, Hit, Query, Surface, SurfaceError, Update, brute_force_closest, measure,
+};
+
+fn same(a: Option<Hit>, b: Option<Hit>) -> Result<(), TestCaseError> {
+    match (a, b) {
+        (None, None) => Ok(()),
+        (Some(a), Some(b)) => {
+            prop_assert_eq!(a.facet, b.facet);
+            let (da, db) = (a.closest.distance, b.closest.distance);
+            prop_assert!((da - db).abs() <= 1e-12 * da.max(db).max(f64::MIN_POSITIVE));
+            prop_assert_eq!(a.closest.feature, b.closest.feature);
+            Ok(())
+        }
+        (a, b) => Err(TestCaseError::fail(format!("{a:?} vs {b:?}"))),
+    }
+}
+
+fn lcg(seed: u64) -> impl FnMut() -> f64 {
+    let mut s = seed;
+    move || {
+        s = s
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// A triangle soup of `n` random facets in the unit cube (some nearly degenerate).
+fn soup(n: usize, seed: u64) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let mut r = lcg(seed);
+    let mut nodes = Vec::new();
+    let mut facets = Vec::new();
+    for f in 0..n {
+        let c = Vec3::new(r(), r(), r());
+        for _ in 0..3 {
+            nodes.push(c + 0.1 * Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5));
+        }
+        let b = u32::try_from(3 * f).unwrap();
+        facets.push([b, b + 1, b + 2]);
+    }
+    (nodes, facets)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    #[test]
+    fn random_soup_matches_brute_force(seed in any::<u64>(), n in 1usize..400, inflation in 0.0..0.05f64) {
+        let (nodes, facets) = soup(n, seed);
+        let surface = Surface::new(facets, nodes.len()).unwrap();
+        let bvh = Bvh::build(&surface, &nodes, inflation).unwrap();
+        let mut r = lcg(seed ^ 0x5555);
+        for _ in 0..50 {
+            let q = Query::point(Vec3::new(1.4 * r() - 0.2, 1.4 * r() - 0.2, 1.4 * r() - 0.2));
+            for max in [f64::INFINITY, 0.05] {
+                same(bvh.closest(&surface, &nodes, &q, max), brute_force_closest(&surface, &nodes, &q, max))?;
+            }
+            let within = bvh.within(&surface, &nodes, &q, 0.1);
+            let mut reference: Vec<Hit> = (0..surface.len() as u32)
+                .filter(|&f| {
+                    let [a, b, c] = surface.corners(f, &nodes);
+                    tricontact::Facet::new(a, b, c).is_ok()
+                })
+                .filter_map(|f| measure(&surface, &nodes, f, &q))
+                .filter(|h| h.closest.distance <= 0.1)
+                .collect();
+            tricontact::search::sort_hits(&mut reference);
+            prop_assert_eq!(within, reference);
+        }
+    }
+}
+
+#[test]
+fn grid_ties_on_edges_and_vertices_match_brute_force() {
+    let (nodes, facets) = grid(8, 0.5);
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    let mut checked = 0;
+    // Every vertex, every edge midpoint and the facet centres, on the plane and above/below it.
+    for j in 0..=16 {
+        for i in 0..=16 {
+            for z in [0.0, 0.3, -0.2] {
+                let q = Query::point(Vec3::new(f64::from(i) * 0.25, f64::from(j) * 0.25, z));
+                let tree = bvh.closest(&surface, &nodes, &q, f64::INFINITY);
+                same(
+                    tree,
+                    brute_force_closest(&surface, &nodes, &q, f64::INFINITY),
+                )
+                .unwrap();
+                // The winner has the lowest index among all facets at the same distance.
+                let d = tree.unwrap().closest.distance;
+                let lowest = (0..surface.len() as u32)
+                    .find(|&f| measure(&surface, &nodes, f, &q).unwrap().closest.distance == d)
+                    .unwrap();
+                assert_eq!(tree.unwrap().facet, lowest);
+                checked += 1;
+            }
+        }
+    }
+    assert_eq!(checked, 17 * 17 * 3);
+}
+
+#[test]
+fn degenerate_facets_are_skipped_and_reported() {
+    let (mut nodes, facets) = grid(4, 1.0);
+    // Collapse facet 5's third node onto its first: nodes shared with other facets move too, so
+    // move a copy instead: append three collinear nodes as an extra facet.
+    let base = u32::try_from(nodes.len()).unwrap();
+    nodes.extend([
+        Vec3::new(1.0, 1.0, 0.1),
+        Vec3::new(2.0, 2.0, 0.1),
+        Vec3::new(3.0, 3.0, 0.1),
+    ]);
+    let mut facets = facets;
+    facets.push([base, base + 1, base + 2]);
+    let degenerate = u32::try_from(facets.len() - 1).unwrap();
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    assert_eq!(bvh.degenerate_facets(), vec![degenerate]);
+    // A point right on the degenerate facet's line gets a regular facet.
+    let q = Query::point(Vec3::new(1.5, 1.5, 0.1));
+    let hit = bvh.closest(&surface, &nodes, &q, f64::INFINITY).unwrap();
+    assert_ne!(hit.facet, degenerate);
+    same(
+        Some(hit),
+        brute_force_closest(&surface, &nodes, &q, f64::INFINITY),
+    )
+    .unwrap();
+}
+
+#[test]
+fn self_contact_never_pairs_a_node_with_its_own_facets() {
+    let (nodes, facets) = torus(24, 12, 2.0, 0.5);
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    for (n, p) in nodes.iter().enumerate() {
+        let q = Query {
+            point: *p,
+            exclude: Some(u32::try_from(n).unwrap()),
+        };
+        let hit = bvh.closest(&surface, &nodes, &q, f64::INFINITY).unwrap();
+        assert!(!surface.facets()[hit.facet as usize].contains(&q.exclude.unwrap()));
+        same(
+            Some(hit),
+            brute_force_closest(&surface, &nodes, &q, f64::INFINITY),
+        )
+        .unwrap();
+        assert!(hit.closest.distance > 0.0);
+    }
+}
+
+/// Query points within ±2 element sizes of the torus surface, in facet order.
+fn near_surface(nodes: &[Vec3], surface: &Surface, seed: u64, h: f64) -> Vec<Query> {
+    let mut r = lcg(seed);
+    surface
+        .facets()
+        .iter()
+        .map(|&[a, b, c]| {
+            let (a, b, c) = (nodes[a as usize], nodes[b as usize], nodes[c as usize]);
+            let (s, t) = (r(), r());
+            let (s, t) = if s + t > 1.0 {
+                (1.0 - s, 1.0 - t)
+            } else {
+                (s, t)
+            };
+            let n = (b - a).cross(&(c - a)).normalize();
+            Query::point(a + s * (b - a) + t * (c - a) + (4.0 * r() - 2.0) * h * n)
+        })
+        .collect()
+}
+
+#[test]
+fn torus_queries_refit_and_incremental_walk_match_brute_force() {
+    let (nodes, facets) = torus(60, 30, 2.0, 0.6);
+    let h = std::f64::consts::TAU * 0.6 / 30.0;
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let mut bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    let queries = near_surface(&nodes, &surface, 7, h);
+    let first = bvh.closest_all(&surface, &nodes, &queries, f64::INFINITY);
+    for (q, hit) in queries.iter().zip(&first).step_by(7) {
+        same(
+            *hit,
+            brute_force_closest(&surface, &nodes, q, f64::INFINITY),
+        )
+        .unwrap();
+    }
+    // A small deformation: a wave of amplitude 0.2 h along the normal and a small twist.
+    let moved: Vec<Vec3> = nodes
+        .iter()
+        .map(|p| {
+            let wave = 0.2 * h * (3.0 * p.x).sin();
+            let twist = 0.01 * p.z;
+            Vec3::new(
+                p.x * twist.cos() - p.y * twist.sin(),
+                p.x * twist.sin() + p.y * twist.cos(),
+                p.z + wave,
+            )
+        })
+        .collect();
+    assert_eq!(bvh.update(&surface, &moved).unwrap(), Update::Refit);
+    let previous: Vec<Option<u32>> = first.iter().map(|h| h.map(|h| h.facet)).collect();
+    let (walked, stats) =
+        bvh.closest_all_from(&surface, &moved, &queries, &previous, f64::INFINITY);
+    let full = bvh.closest_all(&surface, &moved, &queries, f64::INFINITY);
+    for (w, f) in walked.iter().zip(&full) {
+        same(*w, *f).unwrap();
+    }
+    for (q, f) in queries.iter().zip(&full).step_by(11) {
+        same(*f, brute_force_closest(&surface, &moved, q, f64::INFINITY)).unwrap();
+    }
+    assert_eq!(stats.queries, queries.len());
+    assert!(stats.fallbacks * 100 < stats.queries, "{stats:?}");
+    // A large motion (the torus swollen by half) degrades the refit: the tree is rebuilt.
+    let swollen: Vec<Vec3> = nodes
+        .iter()
+        .map(|p| Vec3::new(p.x * 3.0, p.y * 3.0, p.z * 0.3))
+        .collect();
+    assert_eq!(bvh.update(&surface, &swollen).unwrap(), Update::Rebuilt);
+    for q in queries.iter().step_by(13) {
+        same(
+            bvh.closest(&surface, &swollen, q, f64::INFINITY),
+            brute_force_closest(&surface, &swollen, q, f64::INFINITY),
+        )
+        .unwrap();
+    }
+}
+
+#[test]
+fn results_do_not_depend_on_thread_count() {
+    let (nodes, facets) = torus(120, 60, 2.0, 0.6);
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let bvh = Bvh::build(&surface, &nodes, 0.01).unwrap();
+            let queries = near_surface(&nodes, &surface, 3, 0.1);
+            bvh.closest_all(&surface, &nodes, &queries, f64::INFINITY)
+        })
+    };
+    assert_eq!(run(1), run(2));
+}
+
+#[test]
+fn bad_surfaces_are_errors() {
+    assert!(matches!(
+        Surface::new(vec![[0, 1, 5]], 3),
+        Err(SurfaceError::NodeOutOfRange {
+            facet: 0,
+            node: 5,
+            nodes: 3
+        })
+    ));
+    assert!(matches!(
+        Surface::new(vec![[0, 1, 1]], 3),
+        Err(SurfaceError::RepeatedNode { .. })
+    ));
+    let surface = Surface::new(vec![[0, 1, 2]], 3).unwrap();
+    assert!(matches!(
+        Bvh::build(&surface, &[Vec3::zeros(); 2], 0.0),
+        Err(SurfaceError::PositionCount {
+            expected: 3,
+            given: 2
+        })
+    ));
+    // An empty surface answers nothing.
+    let empty = Surface::new(vec![], 0).unwrap();
+    let bvh = Bvh::build(&empty, &[], 0.0).unwrap();
+    assert!(
+        bvh.closest(&empty, &[], &Query::point(Vec3::zeros()), f64::INFINITY)
+            .is_none()
+    );
+}
