@@ -41,7 +41,7 @@ pub mod search;
 
 pub use closest::{
     ClosestPoint, Feature, PointEdge, PointVertex, closest_point, closest_point_on_triangle,
-    point_edge, point_vertex,
+    distance_squared_to_triangle, point_edge, point_vertex,
 };
 pub use error::GeometryError;
 pub use facet::{DEGENERACY_TOLERANCE, Facet, Triad, TriadDerivative};

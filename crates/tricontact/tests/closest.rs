@@ -121,3 +121,17 @@ fn nodes_on_vertices_and_edges_get_lower_dimensional_features() {
     assert!((cp.distance - 1.0).abs() < 1e-15);
     assert_eq!(cp.barycentric, [0.5, 0.5, 0.0]);
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(CASES))]
+
+    /// The search's branch-free squared distance agrees with the kernel's closest point.
+    #[test]
+    fn fast_squared_distance_matches_closest_point(x in pair()) {
+        let (a, b, c, p) = (node(&x, 0), node(&x, 1), node(&x, 2), node(&x, 3));
+        let d = closest_point(&Facet::new(a, b, c).unwrap(), &p).distance;
+        let fast = tricontact::distance_squared_to_triangle(&a, &b, &c, &p).sqrt();
+        let scale = facet_size(&x).max(p.norm());
+        prop_assert!((fast - d).abs() <= 1e-12 * d.max(1e-4 * scale), "{fast} vs {d}");
+    }
+}

@@ -8,15 +8,15 @@
 //! answer is the closest facet.
 //!
 //! The walk falls back to the full tree query when there is no previous facet, when the previous
-//! facet is degenerate now, when the walk exceeds [`MAX_STEPS`], or when its answer is beyond the
-//! search distance. The tree query is then seeded with the walk's answer, which tightens its pruning.
-//! [`IncrementalStats`] counts the fallbacks.
+//! facet is degenerate now or excluded, when the walk exceeds [`MAX_STEPS`], or when its answer is
+//! beyond the search distance. The tree query is then seeded with the walk's answer, which tightens
+//! its pruning. [`IncrementalStats`] counts the fallbacks.
 
 use rayon::prelude::*;
 
-use crate::linalg::Vec3;
-use crate::search::bvh::Bvh;
-use crate::search::query::{Hit, Query, keep, measure};
+use crate::closest::distance_squared_to_triangle;
+use crate::search::bvh::{Bvh, NO_SLOT};
+use crate::search::query::{Candidate, Hit, Query};
 use crate::search::surface::Surface;
 
 /// Most facets a walk may move through before falling back to the tree.
@@ -31,68 +31,68 @@ pub struct IncrementalStats {
     pub fallbacks: usize,
 }
 
-/// The walk from `start`; `None` asks for the fallback.
-fn walk(
-    bvh: &Bvh,
-    surface: &Surface,
-    positions: &[Vec3],
-    q: &Query,
-    start: u32,
-    max_distance: f64,
-) -> (Option<Hit>, bool) {
-    if start as usize >= surface.len() || bvh.degenerate[start as usize] {
-        return (None, false);
-    }
-    let mut best = measure(surface, positions, start, q);
-    let Some(mut current) = best else {
-        return (None, false);
-    };
-    for _ in 0..MAX_STEPS {
-        for &f in surface.neighbours(current.facet) {
-            if bvh.degenerate[f as usize] {
-                continue;
-            }
-            if let Some(hit) = measure(surface, positions, f, q) {
-                keep(&mut best, hit, f64::INFINITY);
-            }
-        }
-        match best {
-            Some(b) if b.facet != current.facet => current = b,
-            _ => {
-                let ok = current.closest.distance <= max_distance;
-                return (ok.then_some(current), ok);
-            }
-        }
-    }
-    (best, false)
-}
-
 impl Bvh {
-    /// The closest facet to `q`, walking from `previous` (the facet it had last time).
+    /// Offers `facet` to the walk's best candidate, if it is in the tree and not excluded.
+    #[inline]
+    fn offer_facet(&self, surface: &Surface, q: &Query, facet: u32, best: &mut Option<Candidate>) {
+        let slot = self.slot[facet as usize];
+        if slot == NO_SLOT || q.excludes(surface, facet) {
+            return;
+        }
+        let c = &self.corners[slot as usize];
+        let d2 = distance_squared_to_triangle(&c[0], &c[1], &c[2], &q.point);
+        Candidate::offer(best, d2, facet, c, f64::INFINITY);
+    }
+
+    /// The walk from `start`: the candidate it ends on, and whether it completed.
+    fn walk(
+        &self,
+        surface: &Surface,
+        q: &Query,
+        start: u32,
+        max2: f64,
+    ) -> (Option<Candidate>, bool) {
+        if start as usize >= surface.len() {
+            return (None, false);
+        }
+        let mut best = None;
+        self.offer_facet(surface, q, start, &mut best);
+        let Some(mut current) = best else {
+            return (None, false);
+        };
+        for _ in 0..MAX_STEPS {
+            for &f in surface.neighbours(current.facet) {
+                self.offer_facet(surface, q, f, &mut best);
+            }
+            match best {
+                Some(b) if b.facet != current.facet => current = b,
+                _ => return (Some(current), current.d2 <= max2),
+            }
+        }
+        (best, false)
+    }
+
+    /// The closest facet to `q`, walking from `previous` (the facet it had last time); the flag
+    /// says whether the query fell back to the tree.
     #[must_use]
     pub fn closest_from(
         &self,
         surface: &Surface,
-        positions: &[Vec3],
         q: &Query,
         previous: Option<u32>,
         max_distance: f64,
     ) -> (Option<Hit>, bool) {
-        if let Some(start) = previous {
-            let (hit, done) = walk(self, surface, positions, q, start, max_distance);
-            if done {
-                return (hit, false);
-            }
-            let mut seed = None;
-            if let Some(h) = hit {
-                keep(&mut seed, h, max_distance);
-            }
-            return (
-                self.closest_seeded(surface, positions, q, max_distance, seed),
-                true,
-            );
-        }
-        (self.closest(surface, positions, q, max_distance), true)
+        let max2 = max_distance * max_distance;
+        let seed = match previous {
+            Some(start) => match self.walk(surface, q, start, max2) {
+                (Some(c), true) => return (Some(c.finish(q)), false),
+                (c, false) => c,
+                (None, true) => None,
+            },
+            None => None,
+        };
+        let best = self.closest_candidate(surface, q, max2, seed);
+        (best.map(|c| c.finish(q)), true)
     }
 
     /// [`Bvh::closest_from`] for many queries in parallel, with the fallback count.
@@ -100,7 +100,6 @@ impl Bvh {
     pub fn closest_all_from(
         &self,
         surface: &Surface,
-        positions: &[Vec3],
         queries: &[Query],
         previous: &[Option<u32>],
         max_distance: f64,
@@ -109,7 +108,7 @@ impl Bvh {
             .par_iter()
             .zip(previous.par_iter())
             .with_min_len(256)
-            .map(|(q, prev)| self.closest_from(surface, positions, q, *prev, max_distance))
+            .map(|(q, prev)| self.closest_from(surface, q, *prev, max_distance))
             .collect();
         let stats = IncrementalStats {
             queries: results.len(),

@@ -3,15 +3,16 @@
 //! # Closest facet
 //! Depth-first traversal with an explicit stack, nearer child first. A subtree is pruned when the
 //! squared distance to its box exceeds the best squared distance so far (with a relative margin of
-//! 1e-12, so that exact ties are never pruned). Every candidate facet is measured with the kernel's
-//! [`closest_point_on_triangle`], which also says where the closest point lies (face, edge,
-//! vertex).
+//! 1e-12, so that exact ties are never pruned). Candidates are compared by the branch-free
+//! [`distance_squared_to_triangle`] on the corner copies the tree keeps in leaf order; only the
+//! winner is measured with the kernel's [`closest_point_on_triangle`], which says where its closest
+//! point lies (face, edge, vertex) and gives the reported distance.
 //!
 //! # Ties and determinism
-//! A hit is better when its distance is smaller, or equal with a smaller facet index. The best hit
-//! under this total order does not depend on the traversal order, so the answer equals the brute
-//! force one exactly and is the same for any number of threads. A node at a vertex shared by six
-//! facets gets the lowest-numbered of them.
+//! A candidate is better when its squared distance is smaller, or equal with a smaller facet index.
+//! The best candidate under this total order does not depend on the traversal order, so the answer
+//! equals the brute-force one exactly and is the same for any number of threads. A node at a
+//! vertex shared by six facets gets the lowest-numbered of them.
 //!
 //! # Self-contact
 //! A query may name its own node (`exclude`): facets that contain it are skipped, so a node never
@@ -19,7 +20,7 @@
 
 use rayon::prelude::*;
 
-use crate::closest::{ClosestPoint, closest_point_on_triangle};
+use crate::closest::{ClosestPoint, closest_point_on_triangle, distance_squared_to_triangle};
 use crate::facet::Facet;
 use crate::linalg::Vec3;
 use crate::search::bvh::{Bvh, index};
@@ -35,16 +36,6 @@ pub struct Hit {
     pub facet: u32,
     /// The closest point of that facet, its feature and distance.
     pub closest: ClosestPoint,
-}
-
-impl Hit {
-    /// `true` when `self` is better than `other`: nearer, or as near with a smaller index.
-    #[must_use]
-    #[inline]
-    pub fn better_than(&self, other: &Hit) -> bool {
-        self.closest.distance < other.closest.distance
-            || (self.closest.distance == other.closest.distance && self.facet < other.facet)
-    }
 }
 
 /// One point to look up: its position, and the node it is (for self-contact), if any.
@@ -65,16 +56,69 @@ impl Query {
             exclude: None,
         }
     }
+
+    /// `true` when the query skips `facet` (it contains the query's own node).
+    #[must_use]
+    #[inline]
+    pub fn excludes(&self, surface: &Surface, facet: u32) -> bool {
+        self.exclude
+            .is_some_and(|n| surface.facets()[facet as usize].contains(&n))
+    }
 }
 
-/// Measures one `facet` against the query (no tree, no degeneracy check); `None` when the query
-/// excludes it.
+/// The best candidate so far: squared distance, facet, and the corners to finish it with.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Candidate {
+    pub(crate) d2: f64,
+    pub(crate) facet: u32,
+    pub(crate) corners: [Vec3; 3],
+}
+
+impl Candidate {
+    /// Offers a facet: kept when it is within `max2` and better than the current best.
+    #[inline]
+    pub(crate) fn offer(
+        best: &mut Option<Candidate>,
+        d2: f64,
+        facet: u32,
+        corners: &[Vec3; 3],
+        max2: f64,
+    ) {
+        let better = match best {
+            None => d2 <= max2,
+            Some(b) => d2 < b.d2 || (d2 == b.d2 && facet < b.facet),
+        };
+        if better {
+            *best = Some(Candidate {
+                d2,
+                facet,
+                corners: *corners,
+            });
+        }
+    }
+
+    /// The bound for pruning: the best squared distance, or `max2` while there is none.
+    #[inline]
+    pub(crate) fn bound(best: &Option<Candidate>, max2: f64) -> f64 {
+        best.map_or(max2, |b| b.d2) * TIE_MARGIN
+    }
+
+    /// The hit, measured with the kernel.
+    #[inline]
+    pub(crate) fn finish(&self, q: &Query) -> Hit {
+        let [a, b, c] = &self.corners;
+        Hit {
+            facet: self.facet,
+            closest: closest_point_on_triangle(a, b, c, &q.point),
+        }
+    }
+}
+
+/// Measures one `facet` against the query with the kernel (no tree, no degeneracy check); `None`
+/// when the query excludes it.
 #[must_use]
-#[inline]
 pub fn measure(surface: &Surface, positions: &[Vec3], facet: u32, q: &Query) -> Option<Hit> {
-    if let Some(n) = q.exclude
-        && surface.facets()[facet as usize].contains(&n)
-    {
+    if q.excludes(surface, facet) {
         return None;
     }
     let [a, b, c] = surface.corners(facet, positions);
@@ -84,76 +128,65 @@ pub fn measure(surface: &Surface, positions: &[Vec3], facet: u32, q: &Query) -> 
     })
 }
 
-/// Keeps the better of `best` and `hit`, among hits within `max_distance`.
-#[inline]
-pub(crate) fn keep(best: &mut Option<Hit>, hit: Hit, max_distance: f64) {
-    if hit.closest.distance <= max_distance && best.is_none_or(|b| hit.better_than(&b)) {
-        *best = Some(hit);
-    }
-}
-
 impl Bvh {
     /// The closest facet to `q` within `max_distance` (`f64::INFINITY` for no limit), at the
     /// positions the tree was last built or updated with.
     #[must_use]
-    pub fn closest(
-        &self,
-        surface: &Surface,
-        positions: &[Vec3],
-        q: &Query,
-        max_distance: f64,
-    ) -> Option<Hit> {
-        self.closest_seeded(surface, positions, q, max_distance, None)
+    pub fn closest(&self, surface: &Surface, q: &Query, max_distance: f64) -> Option<Hit> {
+        self.closest_candidate(surface, q, max_distance * max_distance, None)
+            .map(|c| c.finish(q))
     }
 
-    /// [`Bvh::closest`] starting from a known hit (which tightens pruning from the first node).
-    pub(crate) fn closest_seeded(
+    /// The best candidate, starting from `seed` (which tightens pruning from the first node).
+    pub(crate) fn closest_candidate(
         &self,
         surface: &Surface,
-        positions: &[Vec3],
         q: &Query,
-        max_distance: f64,
-        seed: Option<Hit>,
-    ) -> Option<Hit> {
+        max2: f64,
+        seed: Option<Candidate>,
+    ) -> Option<Candidate> {
         if self.order.is_empty() {
             return None;
         }
-        let mut best = seed.filter(|h| h.closest.distance <= max_distance);
-        let bound2 = |best: &Option<Hit>| {
-            let d = best.map_or(max_distance, |h| h.closest.distance);
-            d * d * TIE_MARGIN
-        };
-        let mut stack = [0u32; 64];
+        let p = &q.point;
+        let mut best = seed.filter(|c| c.d2 <= max2);
+        // Depth ≤ 63 Morton bits + log₂ of the longest run of equal codes.
+        let mut stack = [0u32; 128];
         let mut top = 1usize;
         while top > 0 {
             top -= 1;
-            let node = self.nodes[stack[top] as usize];
-            if node.aabb.distance_squared(&q.point) > bound2(&best) {
+            let id = stack[top];
+            let node = &self.nodes[id as usize];
+            if node.aabb.distance_squared(p) > Candidate::bound(&best, max2) {
                 continue;
             }
             if node.count > 0 {
                 let start = node.first as usize;
-                for &f in &self.order[start..start + node.count as usize] {
-                    if let Some(hit) = measure(surface, positions, f, q) {
-                        keep(&mut best, hit, max_distance);
+                for s in start..start + node.count as usize {
+                    let facet = self.order[s];
+                    if q.excludes(surface, facet) {
+                        continue;
                     }
+                    let c = &self.corners[s];
+                    let d2 = distance_squared_to_triangle(&c[0], &c[1], &c[2], p);
+                    Candidate::offer(&mut best, d2, facet, c, max2);
                 }
                 continue;
             }
-            let (left, right) = (stack[top] + 1, node.first);
-            let dl = self.nodes[left as usize].aabb.distance_squared(&q.point);
-            let dr = self.nodes[right as usize].aabb.distance_squared(&q.point);
-            let (near, far, d_far) = if dl <= dr {
-                (left, right, dr)
+            let (left, right) = (id + 1, node.first);
+            let dl = self.nodes[left as usize].aabb.distance_squared(p);
+            let dr = self.nodes[right as usize].aabb.distance_squared(p);
+            let (near, far, d_near, d_far) = if dl <= dr {
+                (left, right, dl, dr)
             } else {
-                (right, left, dl)
+                (right, left, dr, dl)
             };
-            let bound = bound2(&best);
+            let bound = Candidate::bound(&best, max2);
             if d_far <= bound {
                 stack[top] = far;
                 top += 1;
             }
-            if dl.min(dr) <= bound {
+            if d_near <= bound {
                 stack[top] = near;
                 top += 1;
             }
@@ -163,36 +196,36 @@ impl Bvh {
 
     /// Every facet within `radius` of `q`, sorted by distance then facet index.
     #[must_use]
-    pub fn within(
-        &self,
-        surface: &Surface,
-        positions: &[Vec3],
-        q: &Query,
-        radius: f64,
-    ) -> Vec<Hit> {
+    pub fn within(&self, surface: &Surface, q: &Query, radius: f64) -> Vec<Hit> {
         let mut hits = Vec::new();
         if self.order.is_empty() {
             return hits;
         }
-        let bound = radius * radius * TIE_MARGIN;
+        let r2 = radius * radius;
+        let bound = r2 * TIE_MARGIN;
         let mut stack = vec![0u32];
         while let Some(i) = stack.pop() {
-            let node = self.nodes[i as usize];
+            let node = &self.nodes[i as usize];
             if node.aabb.distance_squared(&q.point) > bound {
                 continue;
             }
-            if node.count > 0 {
-                let start = node.first as usize;
-                for &f in &self.order[start..start + node.count as usize] {
-                    if let Some(hit) = measure(surface, positions, f, q)
-                        && hit.closest.distance <= radius
-                    {
-                        hits.push(hit);
-                    }
-                }
-            } else {
+            if node.count == 0 {
                 stack.push(node.first);
                 stack.push(i + 1);
+                continue;
+            }
+            let start = node.first as usize;
+            for s in start..start + node.count as usize {
+                let facet = self.order[s];
+                let c = &self.corners[s];
+                if !q.excludes(surface, facet)
+                    && distance_squared_to_triangle(&c[0], &c[1], &c[2], &q.point) <= r2
+                {
+                    hits.push(Hit {
+                        facet,
+                        closest: closest_point_on_triangle(&c[0], &c[1], &c[2], &q.point),
+                    });
+                }
             }
         }
         sort_hits(&mut hits);
@@ -205,14 +238,13 @@ impl Bvh {
     pub fn closest_all(
         &self,
         surface: &Surface,
-        positions: &[Vec3],
         queries: &[Query],
         max_distance: f64,
     ) -> Vec<Option<Hit>> {
         queries
             .par_iter()
             .with_min_len(256)
-            .map(|q| self.closest(surface, positions, q, max_distance))
+            .map(|q| self.closest(surface, q, max_distance))
             .collect()
     }
 }
@@ -229,7 +261,7 @@ pub fn sort_hits(hits: &mut [Hit]) {
 
 /// The closest facet by checking every facet: the reference the tree is tested against, and the
 /// O(nodes × facets) search the benchmark compares with. Degenerate facets are skipped, as in the
-/// tree.
+/// tree, and candidates are compared exactly as the tree compares them.
 #[must_use]
 pub fn brute_force_closest(
     surface: &Surface,
@@ -237,15 +269,16 @@ pub fn brute_force_closest(
     q: &Query,
     max_distance: f64,
 ) -> Option<Hit> {
+    let max2 = max_distance * max_distance;
     let mut best = None;
     for f in 0..surface.len() {
-        let [a, b, c] = surface.corners(index(f), positions);
-        if Facet::new(a, b, c).is_err() {
+        let facet = index(f);
+        let c = surface.corners(facet, positions);
+        if q.excludes(surface, facet) || Facet::new(c[0], c[1], c[2]).is_err() {
             continue;
         }
-        if let Some(hit) = measure(surface, positions, index(f), q) {
-            keep(&mut best, hit, max_distance);
-        }
+        let d2 = distance_squared_to_triangle(&c[0], &c[1], &c[2], &q.point);
+        Candidate::offer(&mut best, d2, facet, &c, max2);
     }
-    best
+    best.map(|c| c.finish(q))
 }

@@ -1,0 +1,229 @@
+//! # Contact search benchmark
+//!
+//! Measures, in one run and on the same scenes, the BVH build, closest-facet queries in coherent
+//! and random order, the speed-up over brute force and over `parry3d-f64`'s BVH point projection,
+//! and the incremental walk's speed-up over the full query after a small deformation.
+//!
+//! Run with `cargo run --release -p tricontact --example search_bench` (add `-- --quick` to skip
+//! the 10⁶-facet scene). Scenes: triangulated tori (major radius 3, minor radius 1) with about
+//! 10⁴, 10⁵ and 10⁶ facets; one query point per facet, at a random point of the facet moved by up
+//! to ±2 element sizes along its normal. "Coherent" queries come in facet order (neighbours in
+//! space are neighbours in the list); "random" queries are shuffled. Per-core figures use a
+//! one-thread pool; brute force is timed on a subset of queries and its ratio is per query.
+
+use std::time::Instant;
+
+use parry3d_f64::math::Vector as PVec;
+use parry3d_f64::query::PointQuery;
+use parry3d_f64::shape::TriMesh;
+use tricontact::Vec3;
+use tricontact::search::scenes::torus;
+use tricontact::search::{Bvh, Hit, Query, Surface, Update, brute_force_closest};
+
+fn lcg(seed: u64) -> impl FnMut() -> f64 {
+    let mut s = seed;
+    move || {
+        s = s
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+fn near_surface(nodes: &[Vec3], facets: &[[u32; 3]], h: f64) -> Vec<Query> {
+    let mut r = lcg(11);
+    facets
+        .iter()
+        .map(|&[a, b, c]| {
+            let (a, b, c) = (nodes[a as usize], nodes[b as usize], nodes[c as usize]);
+            let (s, t) = (r(), r());
+            let (s, t) = if s + t > 1.0 {
+                (1.0 - s, 1.0 - t)
+            } else {
+                (s, t)
+            };
+            let n = (b - a).cross(&(c - a)).normalize();
+            Query::point(a + s * (b - a) + t * (c - a) + (4.0 * r() - 2.0) * h * n)
+        })
+        .collect()
+}
+
+fn shuffled<T: Copy>(v: &[T]) -> Vec<T> {
+    let mut r = lcg(5);
+    let mut out = v.to_vec();
+    for i in (1..out.len()).rev() {
+        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+        let j = (r() * (i + 1) as f64) as usize;
+        out.swap(i, j.min(i));
+    }
+    out
+}
+
+/// Best of `reps` wall-clock times of `f`, in seconds, with its last result.
+fn time<T>(reps: usize, mut f: impl FnMut() -> T) -> (f64, T) {
+    let mut best = f64::INFINITY;
+    let mut out = None;
+    for _ in 0..reps {
+        let t = Instant::now();
+        let v = f();
+        best = best.min(t.elapsed().as_secs_f64());
+        out = Some(v);
+    }
+    (best, out.expect("at least one repetition"))
+}
+
+fn pool(threads: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("thread pool")
+}
+
+fn scene(nu: u32, nv: u32) {
+    let (nodes, facets) = torus(nu, nv, 3.0, 1.0);
+    let h = std::f64::consts::TAU / f64::from(nv);
+    let n = facets.len();
+    let queries = near_surface(&nodes, &facets, h);
+    let random = shuffled(&queries);
+    let nq = queries.len() as f64;
+    println!(
+        "\n## torus, {n} facets, {} query points, element size {h:.4}",
+        queries.len()
+    );
+
+    let (t_surface, surface) = time(1, || {
+        Surface::new(facets.clone(), nodes.len()).expect("surface")
+    });
+    let (t_build, mut bvh) = time(3, || Bvh::build(&surface, &nodes, 0.0).expect("bvh"));
+    let (t_build1, _) =
+        pool(1).install(|| time(3, || Bvh::build(&surface, &nodes, 0.0).expect("bvh")));
+    println!("surface adjacency       {:>9.2} ms", t_surface * 1e3);
+    println!(
+        "BVH build (2 threads)   {:>9.2} ms   {:>7.2} M facets/s   (1 thread: {:.2} M facets/s)",
+        t_build * 1e3,
+        n as f64 / t_build / 1e6,
+        n as f64 / t_build1 / 1e6
+    );
+
+    let inf = f64::INFINITY;
+    let one = pool(1);
+    let (t_coh, hits) = one.install(|| time(3, || bvh.closest_all(&surface, &queries, inf)));
+    let (t_rand, _) = one.install(|| time(3, || bvh.closest_all(&surface, &random, inf)));
+    let (t_coh2, _) = time(3, || bvh.closest_all(&surface, &queries, inf));
+    println!(
+        "queries, coherent       {:>9.2} ms   {:>7.2} M/s per core   (2 threads: {:.2} M/s)",
+        t_coh * 1e3,
+        nq / t_coh / 1e6,
+        nq / t_coh2 / 1e6
+    );
+    println!(
+        "queries, random order   {:>9.2} ms   {:>7.2} M/s per core",
+        t_rand * 1e3,
+        nq / t_rand / 1e6
+    );
+
+    // Brute force on a subset, one thread, same queries.
+    let subset = (2000 * 10_000 / n).clamp(20, 2000);
+    let sample: Vec<Query> = queries
+        .iter()
+        .step_by(queries.len() / subset)
+        .copied()
+        .collect();
+    let (t_brute, brute) = time(1, || {
+        sample
+            .iter()
+            .map(|q| brute_force_closest(&surface, &nodes, q, inf))
+            .collect::<Vec<_>>()
+    });
+    let agree = sample
+        .iter()
+        .zip(&brute)
+        .filter(|(q, b)| bvh.closest(&surface, q, inf).map(|h| h.facet) == b.map(|h| h.facet))
+        .count();
+    let per_brute = t_brute / sample.len() as f64;
+    let per_tree = t_coh / nq;
+    println!(
+        "brute force             {:>9.2} µs/query on {} queries ({agree} identical answers); tree is {:.0}× faster per query",
+        per_brute * 1e6,
+        sample.len(),
+        per_brute / per_tree
+    );
+
+    // parry3d-f64: same vertices, same facets, same query points.
+    let pv: Vec<PVec> = nodes.iter().map(|p| PVec::new(p.x, p.y, p.z)).collect();
+    let (t_pbuild, mesh) = time(1, || {
+        TriMesh::new(pv.clone(), facets.clone()).expect("parry trimesh")
+    });
+    let (t_parry, proj) = time(3, || {
+        queries
+            .iter()
+            .map(|q| mesh.project_local_point(PVec::new(q.point.x, q.point.y, q.point.z), false))
+            .collect::<Vec<_>>()
+    });
+    let worst = hits
+        .iter()
+        .zip(&proj)
+        .zip(&queries)
+        .map(|((h, p), q)| {
+            let d_parry = (p.point - PVec::new(q.point.x, q.point.y, q.point.z)).length();
+            (h.map_or(inf, |h: Hit| h.closest.distance) - d_parry).abs()
+        })
+        .fold(0.0, f64::max);
+    println!(
+        "parry3d-f64 TriMesh     build {:.2} ms, queries {:.2} ms = {:.2} M/s; tricontact is {:.2}× faster (coherent, 1 core); largest distance difference {worst:.1e}",
+        t_pbuild * 1e3,
+        t_parry * 1e3,
+        nq / t_parry / 1e6,
+        t_parry / t_coh
+    );
+
+    // Incremental: a small deformation, refit, then walk from last facets vs full queries.
+    let moved: Vec<Vec3> = nodes
+        .iter()
+        .map(|p| {
+            let wave = 0.2 * h * (2.0 * p.x).sin();
+            let twist = 0.002 * p.z;
+            Vec3::new(
+                p.x * twist.cos() - p.y * twist.sin(),
+                p.x * twist.sin() + p.y * twist.cos(),
+                p.z + wave,
+            )
+        })
+        .collect();
+    let (t_refit, kind) = time(1, || bvh.update(&surface, &moved).expect("update"));
+    assert_eq!(kind, Update::Refit);
+    let previous: Vec<Option<u32>> = hits.iter().map(|h| h.map(|h| h.facet)).collect();
+    let (t_full, full) = one.install(|| time(3, || bvh.closest_all(&surface, &queries, inf)));
+    let (t_walk, (walked, stats)) = one.install(|| {
+        time(3, || {
+            bvh.closest_all_from(&surface, &queries, &previous, inf)
+        })
+    });
+    let mismatches = walked
+        .iter()
+        .zip(&full)
+        .filter(|(a, b)| a.map(|h| h.facet) != b.map(|h| h.facet))
+        .count();
+    println!(
+        "refit after deformation {:>9.2} ms; incremental {:.2} ms vs full {:.2} ms per core: {:.1}× faster, {} fallbacks ({:.3} %), {mismatches} answers differ",
+        t_refit * 1e3,
+        t_walk * 1e3,
+        t_full * 1e3,
+        t_full / t_walk,
+        stats.fallbacks,
+        100.0 * stats.fallbacks as f64 / nq
+    );
+}
+
+fn main() {
+    let quick = std::env::args().any(|a| a == "--quick");
+    println!(
+        "contact search benchmark ({} threads available)",
+        rayon::current_num_threads()
+    );
+    scene(100, 50);
+    scene(316, 158);
+    if !quick {
+        scene(1000, 500);
+    }
+}
