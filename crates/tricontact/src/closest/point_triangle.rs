@@ -113,35 +113,12 @@ fn region(a: &Vec3, b: &Vec3, c: &Vec3, p: &Vec3) -> (Feature, [f64; 3]) {
     (Feature::Face, [va * inv, vb * inv, vc * inv])
 }
 
-/// Squared distance from `p` to the triangle `(a, b, c)`, branch-free: the quantity the contact
-/// search compares for every candidate facet, cheaper than [`closest_point_on_triangle`] (no feature,
-/// no square root).
-///
-/// With `r = p − a`, the projection of `p` lies inside when its barycentric coordinates, from the
-/// Gram matrix of the edges `ab`, `ac`, are non-negative; the distance is then `(r·n)²/|n|²` with
-/// `n = ab × ac`. Otherwise it is the smallest of the three clamped point–segment distances. The
-/// triangle must not be degenerate (the search skips those).
+/// Squared distance from `p` to the triangle `(a, b, c)`: the quantity the contact search compares
+/// for every candidate facet. The same Voronoi-region computation as
+/// [`closest_point_on_triangle`], without building the feature or taking the square root.
 #[must_use]
 #[inline]
 pub fn distance_squared_to_triangle(a: &Vec3, b: &Vec3, c: &Vec3, p: &Vec3) -> f64 {
-    let (ab, ac, r) = (b - a, c - a, p - a);
-    let (d00, d01, d11) = (ab.dot(&ab), ab.dot(&ac), ac.dot(&ac));
-    let (d20, d21) = (r.dot(&ab), r.dot(&ac));
-    let gram = d00 * d11 - d01 * d01;
-    let v = d11 * d20 - d01 * d21;
-    let w = d00 * d21 - d01 * d20;
-    let segment =
-        |r: Vec3, e: Vec3, re: f64, ee: f64| (r - (re / ee).clamp(0.0, 1.0) * e).norm_squared();
-    let (bc, rb) = (c - b, p - b);
-    let edges = segment(r, ab, d20, d00)
-        .min(segment(r, ac, d21, d11))
-        .min(segment(rb, bc, rb.dot(&bc), bc.norm_squared()));
-    let n = ab.cross(&ac);
-    let h = r.dot(&n);
-    let face = h * h / n.norm_squared();
-    if v >= 0.0 && w >= 0.0 && v + w <= gram {
-        face
-    } else {
-        edges
-    }
+    let (_, [na, nb, nc]) = region(a, b, c, p);
+    (p - (a * na + b * nb + c * nc)).norm_squared()
 }

@@ -23,7 +23,7 @@ use rayon::prelude::*;
 use crate::closest::{ClosestPoint, closest_point_on_triangle, distance_squared_to_triangle};
 use crate::facet::Facet;
 use crate::linalg::Vec3;
-use crate::search::bvh::{Bvh, index};
+use crate::search::bvh::{Bvh, as_leaf, index};
 use crate::search::surface::Surface;
 
 /// Relative margin on squared distances below which a box is never pruned.
@@ -145,24 +145,20 @@ impl Bvh {
         max2: f64,
         seed: Option<Candidate>,
     ) -> Option<Candidate> {
-        if self.order.is_empty() {
-            return None;
-        }
         let p = &q.point;
         let mut best = seed.filter(|c| c.d2 <= max2);
-        // Depth ≤ 63 Morton bits + log₂ of the longest run of equal codes.
-        let mut stack = [0u32; 128];
+        // (child reference, squared distance to its box); depth ≤ 63 Morton bits + log₂ of the
+        // longest run of equal codes, so 128 entries suffice.
+        let mut stack = [(self.root, 0.0f64); 128];
         let mut top = 1usize;
         while top > 0 {
             top -= 1;
-            let id = stack[top];
-            let node = &self.nodes[id as usize];
-            if node.aabb.distance_squared(p) > Candidate::bound(&best, max2) {
+            let (child, d2_box) = stack[top];
+            if d2_box > Candidate::bound(&best, max2) {
                 continue;
             }
-            if node.count > 0 {
-                let start = node.first as usize;
-                for s in start..start + node.count as usize {
+            if let Some((first, count)) = as_leaf(child) {
+                for s in first..first + count {
                     let facet = self.order[s];
                     if q.excludes(surface, facet) {
                         continue;
@@ -173,20 +169,20 @@ impl Bvh {
                 }
                 continue;
             }
-            let (left, right) = (id + 1, node.first);
-            let dl = self.nodes[left as usize].aabb.distance_squared(p);
-            let dr = self.nodes[right as usize].aabb.distance_squared(p);
-            let (near, far, d_near, d_far) = if dl <= dr {
-                (left, right, dl, dr)
+            let node = &self.nodes[child as usize];
+            let d0 = node.child_box(0).distance_squared(p);
+            let d1 = node.child_box(1).distance_squared(p);
+            let (near, far) = if d0 <= d1 {
+                ((node.child[0], d0), (node.child[1], d1))
             } else {
-                (right, left, dr, dl)
+                ((node.child[1], d1), (node.child[0], d0))
             };
             let bound = Candidate::bound(&best, max2);
-            if d_far <= bound {
+            if far.1 <= bound {
                 stack[top] = far;
                 top += 1;
             }
-            if d_near <= bound {
+            if near.1 <= bound {
                 stack[top] = near;
                 top += 1;
             }
@@ -198,33 +194,29 @@ impl Bvh {
     #[must_use]
     pub fn within(&self, surface: &Surface, q: &Query, radius: f64) -> Vec<Hit> {
         let mut hits = Vec::new();
-        if self.order.is_empty() {
-            return hits;
-        }
         let r2 = radius * radius;
         let bound = r2 * TIE_MARGIN;
-        let mut stack = vec![0u32];
-        while let Some(i) = stack.pop() {
-            let node = &self.nodes[i as usize];
-            if node.aabb.distance_squared(&q.point) > bound {
+        let mut stack = vec![self.root];
+        while let Some(child) = stack.pop() {
+            if let Some((first, count)) = as_leaf(child) {
+                for s in first..first + count {
+                    let facet = self.order[s];
+                    let c = &self.corners[s];
+                    if !q.excludes(surface, facet)
+                        && distance_squared_to_triangle(&c[0], &c[1], &c[2], &q.point) <= r2
+                    {
+                        hits.push(Hit {
+                            facet,
+                            closest: closest_point_on_triangle(&c[0], &c[1], &c[2], &q.point),
+                        });
+                    }
+                }
                 continue;
             }
-            if node.count == 0 {
-                stack.push(node.first);
-                stack.push(i + 1);
-                continue;
-            }
-            let start = node.first as usize;
-            for s in start..start + node.count as usize {
-                let facet = self.order[s];
-                let c = &self.corners[s];
-                if !q.excludes(surface, facet)
-                    && distance_squared_to_triangle(&c[0], &c[1], &c[2], &q.point) <= r2
-                {
-                    hits.push(Hit {
-                        facet,
-                        closest: closest_point_on_triangle(&c[0], &c[1], &c[2], &q.point),
-                    });
+            let node = &self.nodes[child as usize];
+            for k in 0..2 {
+                if node.child_box(k).distance_squared(&q.point) <= bound {
+                    stack.push(node.child[k]);
                 }
             }
         }
