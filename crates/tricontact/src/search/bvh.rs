@@ -60,7 +60,8 @@ fn leaf(first: usize, count: usize) -> Child {
 /// `Some((first, count))` for a leaf reference.
 #[inline]
 pub(crate) fn as_leaf(child: Child) -> Option<(usize, usize)> {
-    (child & LEAF_FLAG != 0).then(|| ((child & 0x0fff_ffff) as usize, ((child >> 28) & 7) as usize))
+    (child & LEAF_FLAG != 0)
+        .then_some(((child & 0x0fff_ffff) as usize, ((child >> 28) & 7) as usize))
 }
 
 /// An internal node: the boxes of its two children (outward-rounded `f32`) and the references.
