@@ -9,6 +9,7 @@
 //! * [`multiplier`]: the constraint `c = P`, its Jacobian and geometric stiffness `λ∇²c`;
 //! * [`closest`]: closest points near facet boundaries (face / edge / vertex), point–edge and
 //!   point–vertex distances with derivatives;
+//! * [`contact`]: the facet-choice rule at edges and vertices, assembled penalty terms;
 //! * [`search`]: which facet each slave node meets, in meshes of millions of facets (BVH,
 //!   incremental walk, parallel queries).
 //!
@@ -31,6 +32,7 @@
 //! ```
 
 pub mod closest;
+pub mod contact;
 pub mod error;
 pub mod facet;
 pub mod linalg;

@@ -1,0 +1,79 @@
+//! Which facet a slave node is constrained against: one constraint per node and pass.
+//!
+//! # The rule
+//! Among the master facets within the search distance of the node (the tree's `within` query),
+//! keep those the node **projects into** — every barycentric coordinate `N_a ≥ −tol` with
+//! [`PROJECTION_TOLERANCE`] — and choose the one with the **smallest `|P|`**, ties to the lowest
+//! facet index. The constraint is the node–facet gap `P` of the formulation on that facet.
+//!
+//! Why this rule:
+//! * **Flat surface, shared edge or vertex.** The node projects into every facet sharing the edge
+//!   or vertex (the tolerance absorbs round-off), all give the same `P`, and the lowest index wins:
+//!   the node is neither missed nor counted twice. On the shared edge the shape functions of both
+//!   facets agree, so the force does not depend on the choice.
+//! * **Sliding.** Crossing an edge of a flat region, `P` and the shape functions are continuous,
+//!   so gap and force are continuous.
+//! * **Convex edge or corner** (a ridge of the master body). A node inside the body near the ridge
+//!   projects into the facets on both sides; the smaller `|P|` is the shallower penetration, the
+//!   natural way out. A node outside, above the ridge, projects into neither: it gets no
+//!   constraint, which is right, since it is outside. It cannot fall through: to get inside it
+//!   passes through the region where it projects into a facet with `P` near zero.
+//! * **Concave edge** (a valley). A node penetrating one flank near the valley projects into that
+//!   flank only (its foot on the other flank's plane lies beyond the valley line), so the
+//!   penetrated facet is chosen; for a node above both flanks either choice has `P > 0`.
+//!
+//! The rule assumes penetrations small compared with the facet size, as contact enforcement keeps
+//! them.
+
+use crate::facet::Facet;
+use crate::linalg::Vec3;
+use crate::node_facet::{NodeFacet, project};
+use crate::search::{Bvh, Query, Surface};
+
+/// Tolerance on the barycentric coordinates for "the node projects into the facet": a node on a
+/// shared edge or vertex projects into every facet sharing it despite round-off.
+pub const PROJECTION_TOLERANCE: f64 = 1e-9;
+
+/// The facet `slave` is constrained against, with the evaluated node–facet pair, or `None` when the
+/// node projects into no facet within `radius`.
+///
+/// `bvh` must have been built or updated with `positions`. The slave node is excluded from its own
+/// facets (self-contact).
+#[must_use]
+pub fn choose_facet(
+    surface: &Surface,
+    bvh: &Bvh,
+    positions: &[Vec3],
+    slave: u32,
+    radius: f64,
+) -> Option<(u32, NodeFacet)> {
+    let x = positions[slave as usize];
+    let query = Query {
+        point: x,
+        exclude: Some(slave),
+    };
+    let mut best: Option<(u32, NodeFacet)> = None;
+    for hit in bvh.within(surface, &query, radius) {
+        let [a, b, c] = surface.corners(hit.facet, positions);
+        let Ok(facet) = Facet::new(a, b, c) else {
+            continue;
+        };
+        let Ok(projection) = project(&facet, &x) else {
+            continue;
+        };
+        if !projection.is_inside(PROJECTION_TOLERANCE) {
+            continue;
+        }
+        let better = best.as_ref().is_none_or(|(f, p)| {
+            let (g, g_best) = (projection.gap.abs(), p.gap().abs());
+            g < g_best || (g == g_best && hit.facet < *f)
+        });
+        if better {
+            let Ok(pair) = NodeFacet::new(a, b, c, x) else {
+                continue;
+            };
+            best = Some((hit.facet, pair));
+        }
+    }
+    best
+}

@@ -1,0 +1,12 @@
+//! The contact layer's per-node logic, independent of any finite-element code: which facet a slave
+//! node is constrained against, and the assembled penalty terms of a set of such constraints.
+//!
+//! * [`choice`]: the facet-choice rule at edges and vertices (one constraint per node and pass);
+//! * [`assembly`]: penalty forces and tangents of many node–facet constraints scattered to global
+//!   degrees of freedom (`3 × node + component`).
+
+pub mod assembly;
+pub mod choice;
+
+pub use assembly::{Constraint, PenaltyAssembly, assemble_penalty};
+pub use choice::{PROJECTION_TOLERANCE, choose_facet};

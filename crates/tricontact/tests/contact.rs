@@ -1,0 +1,214 @@
+//! The contact layer's facet choice at edges and vertices, sliding, convex and concave edges, and
+//! the assembled penalty terms against finite differences.
+
+use tricontact::contact::{Constraint, assemble_penalty, choose_facet};
+use tricontact::search::scenes::grid;
+use tricontact::search::{Bvh, Surface};
+use tricontact::{Vec3, penalty};
+
+/// A flat master grid (4 × 4 squares of size 1, normals +z) plus one slave node at `x`.
+fn flat_with_slave(x: Vec3) -> (Surface, Vec<Vec3>, u32) {
+    let (mut nodes, facets) = grid(4, 1.0);
+    let slave = u32::try_from(nodes.len()).unwrap();
+    nodes.push(x);
+    (Surface::new(facets, nodes.len()).unwrap(), nodes, slave)
+}
+
+fn slave_force(x: Vec3, alpha: f64) -> (u32, f64, Vec3) {
+    let (surface, nodes, slave) = flat_with_slave(x);
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    let (facet, pair) = choose_facet(&surface, &bvh, &nodes, slave, 0.5).expect("a facet");
+    let terms = penalty(&pair, alpha).unwrap();
+    (facet, pair.gap(), terms.resistance(3))
+}
+
+#[test]
+fn interior_edge_and_vertex_nodes_get_the_same_force() {
+    let depth = 1e-3;
+    let alpha = 1e4;
+    let reference = alpha * depth;
+    for (x, y) in [
+        (1.3, 2.6),
+        (1.5, 2.0),
+        (2.0, 2.5),
+        (2.0, 2.0),
+        (1.5, 1.5),
+        (0.0, 0.0),
+        (4.0, 4.0),
+    ] {
+        let (_, gap, r) = slave_force(Vec3::new(x, y, -depth), alpha);
+        assert!((gap + depth).abs() <= 1e-15, "({x}, {y}): gap {gap}");
+        assert!(
+            (r - Vec3::new(0.0, 0.0, reference)).norm() <= 1e-12 * reference,
+            "({x}, {y}): {r}"
+        );
+    }
+}
+
+#[test]
+fn a_node_on_a_shared_vertex_is_constrained_once_to_the_lowest_facet() {
+    let (surface, nodes, slave) = flat_with_slave(Vec3::new(2.0, 2.0, -1e-3));
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    let (facet, _) = choose_facet(&surface, &bvh, &nodes, slave, 0.5).unwrap();
+    // Node (2, 2) of the 5 × 5 node grid is node 12; the lowest facet containing it wins.
+    let lowest = (0..surface.len() as u32)
+        .find(|&f| surface.facets()[f as usize].contains(&12))
+        .unwrap();
+    assert_eq!(facet, lowest);
+}
+
+#[test]
+fn sliding_across_facet_edges_keeps_gap_and_force_constant() {
+    let depth = 2e-3;
+    let alpha = 5e3;
+    let mut facets_seen = std::collections::BTreeSet::new();
+    for step in 0..=400 {
+        let s = f64::from(step) / 400.0;
+        let x = Vec3::new(0.2 + 3.5 * s, 0.7 + 2.1 * s, -depth);
+        let (facet, gap, r) = slave_force(x, alpha);
+        facets_seen.insert(facet);
+        assert!((gap + depth).abs() <= 1e-15);
+        assert!(
+            (r.z - alpha * depth).abs() <= 1e-12 * alpha * depth && r.x.abs() + r.y.abs() < 1e-12
+        );
+    }
+    assert!(
+        facets_seen.len() >= 6,
+        "crossed {} facets",
+        facets_seen.len()
+    );
+}
+
+/// A roof: two strips of facets meeting at the ridge `x = 0` (apex `z = 0`), slopes `z = −|x|/2`,
+/// outward normals pointing up and away from the ridge; or a valley with `z = +|x|/2`.
+fn ridge(sign: f64) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let mut nodes = Vec::new();
+    for j in 0..5 {
+        for i in 0..5 {
+            let x = f64::from(i) - 2.0;
+            nodes.push(Vec3::new(x, f64::from(j), sign * x.abs() / 2.0));
+        }
+    }
+    let id = |i: u32, j: u32| j * 5 + i;
+    let mut facets = Vec::new();
+    for j in 0..4 {
+        for i in 0..4 {
+            facets.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            facets.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    (nodes, facets)
+}
+
+fn choose_on(nodes: &[Vec3], facets: &[[u32; 3]], x: Vec3) -> Option<f64> {
+    let mut all = nodes.to_vec();
+    let slave = u32::try_from(all.len()).unwrap();
+    all.push(x);
+    let surface = Surface::new(facets.to_vec(), all.len()).unwrap();
+    let bvh = Bvh::build(&surface, &all, 0.0).unwrap();
+    choose_facet(&surface, &bvh, &all, slave, 1.0).map(|(_, pair)| pair.gap())
+}
+
+#[test]
+fn a_node_pushed_through_a_convex_ridge_is_always_caught() {
+    let (nodes, facets) = ridge(-1.0);
+    // Straight down through the apex line, and obliquely across it while inside.
+    for k in 0..=100 {
+        let z = 0.2 - 0.4 * f64::from(k) / 100.0;
+        let gap = choose_on(&nodes, &facets, Vec3::new(0.0, 2.3, z));
+        if z < 0.0 {
+            let gap = gap.expect("a node inside the body is constrained");
+            // The shallowest way out: the distance to the nearer flank.
+            assert!(gap < 0.0 && gap >= z, "z = {z}: gap {gap}");
+        } else if let Some(gap) = gap {
+            assert!(
+                gap >= 0.0,
+                "z = {z}: an outside node reports penetration {gap}"
+            );
+        }
+    }
+    for k in 0..=100 {
+        let x = -0.3 + 0.6 * f64::from(k) / 100.0;
+        let inside = -x.abs() / 2.0 - 0.01;
+        let gap = choose_on(&nodes, &facets, Vec3::new(x, 1.7, inside)).expect("caught");
+        assert!(gap < 0.0, "x = {x}: gap {gap}");
+    }
+}
+
+#[test]
+fn a_node_penetrating_one_flank_of_a_valley_is_caught() {
+    let (nodes, facets) = ridge(1.0);
+    for k in 1..=50 {
+        let x = 0.02 * f64::from(k);
+        // Just below the right flank z = x/2, above the left flank's plane z = −x/2.
+        let gap = choose_on(&nodes, &facets, Vec3::new(x, 2.2, x / 2.0 - 0.005)).expect("caught");
+        assert!(gap < 0.0, "x = {x}: gap {gap}");
+    }
+}
+
+#[test]
+fn assembled_penalty_terms_match_finite_differences() {
+    let (mut nodes, facets) = grid(2, 1.0);
+    // Perturb the master so the facets are not coplanar, then add three slave nodes.
+    for (n, p) in nodes.iter_mut().enumerate() {
+        p.z = 0.05 * ((n * 7 % 5) as f64 - 2.0);
+    }
+    let base = u32::try_from(nodes.len()).unwrap();
+    nodes.extend([
+        Vec3::new(0.4, 0.3, -0.2),
+        Vec3::new(1.3, 1.6, -0.15),
+        Vec3::new(0.9, 1.1, 0.3),
+    ]);
+    let constraints: Vec<Constraint> = (0..3)
+        .map(|s| {
+            let f = [0usize, 5, 3][s];
+            let [a, b, c] = facets[f];
+            Constraint {
+                nodes: [a, b, c, base + u32::try_from(s).unwrap()],
+            }
+        })
+        .collect();
+    let alpha = 1e3;
+    let at =
+        |x: &[f64]| -> Vec<Vec3> { x.chunks(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect() };
+    let x0: Vec<f64> = nodes.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
+    let n = x0.len();
+    let exact = assemble_penalty(&constraints, &nodes, alpha).unwrap();
+    assert_eq!(exact.active, 2, "the third slave node is above its facet");
+    let mut k = vec![0.0; n * n];
+    for &(r, c, v) in &exact.triplets {
+        k[r * n + c] += v;
+    }
+    let h = 1e-6;
+    let mut worst_f: f64 = 0.0;
+    let mut worst_k: f64 = 0.0;
+    for d in 0..n {
+        let (mut xp, mut xm) = (x0.clone(), x0.clone());
+        xp[d] += h;
+        xm[d] -= h;
+        let (p, m) = (
+            assemble_penalty(&constraints, &at(&xp), alpha).unwrap(),
+            assemble_penalty(&constraints, &at(&xm), alpha).unwrap(),
+        );
+        worst_f = worst_f.max(((p.energy - m.energy) / (2.0 * h) - exact.force[d]).abs());
+        for r in 0..n {
+            worst_k = worst_k.max(((p.force[r] - m.force[r]) / (2.0 * h) - k[r * n + d]).abs());
+        }
+    }
+    let f_scale = exact.force.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let k_scale = k.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    assert!(
+        worst_f <= 1e-6 * f_scale,
+        "force error {worst_f:e} of {f_scale:e}"
+    );
+    assert!(
+        worst_k <= 1e-6 * k_scale,
+        "tangent error {worst_k:e} of {k_scale:e}"
+    );
+    // The tangent is symmetric.
+    for r in 0..n {
+        for c in 0..n {
+            assert!((k[r * n + c] - k[c * n + r]).abs() <= 1e-12 * k_scale);
+        }
+    }
+}
