@@ -40,7 +40,7 @@ pub struct MultiplierTerms {
 /// included).
 pub fn multiplier(pair: &NodeFacet, lambda: f64) -> Result<MultiplierTerms, GeometryError> {
     let geometric_stiffness = pair.second_order(0.0, lambda);
-    if !all_finite(&geometric_stiffness) {
+    if !(pair.cannot_overflow(0.0, lambda) || all_finite(&geometric_stiffness)) {
         return Err(GeometryError::Overflow);
     }
     Ok(MultiplierTerms {

@@ -55,7 +55,9 @@ pub fn penalty(pair: &NodeFacet, alpha: f64) -> Result<PenaltyTerms, GeometryErr
     let grad = pair.gap_gradient();
     let stiffness = pair.second_order(alpha, alpha * gap);
     let force = grad * (alpha * gap);
-    if !(all_finite(&stiffness) && all_finite(&force)) {
+    let checked =
+        pair.cannot_overflow(alpha, alpha * gap) || (all_finite(&stiffness) && all_finite(&force));
+    if !checked {
         return Err(GeometryError::Overflow);
     }
     Ok(PenaltyTerms {
