@@ -91,6 +91,23 @@ impl Node {
         }
     }
 
+    /// Squared distances from `p` to both child boxes (zero inside), written out with plain
+    /// comparisons: this is the innermost loop of every query.
+    #[inline]
+    pub(crate) fn child_distances_squared(&self, p: &Vec3) -> [f64; 2] {
+        let gap = |lo: f32, hi: f32, x: f64| {
+            let below = f64::from(lo) - x;
+            let above = x - f64::from(hi);
+            let d = if below > above { below } else { above };
+            if d > 0.0 { d * d } else { 0.0 }
+        };
+        std::array::from_fn(|k| {
+            gap(self.lo[k][0], self.hi[k][0], p.x)
+                + gap(self.lo[k][1], self.hi[k][1], p.y)
+                + gap(self.lo[k][2], self.hi[k][2], p.z)
+        })
+    }
+
     /// Stores `b` as the box of child `k`, rounded outwards to `f32`.
     fn set_child_box(&mut self, k: usize, b: &Aabb) {
         for d in 0..3 {

@@ -170,8 +170,7 @@ impl Bvh {
                 continue;
             }
             let node = &self.nodes[child as usize];
-            let d0 = node.child_box(0).distance_squared(p);
-            let d1 = node.child_box(1).distance_squared(p);
+            let [d0, d1] = node.child_distances_squared(p);
             let (near, far) = if d0 <= d1 {
                 ((node.child[0], d0), (node.child[1], d1))
             } else {
