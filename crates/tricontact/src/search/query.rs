@@ -213,8 +213,12 @@ impl Bvh {
                 continue;
             }
             let node = &self.nodes[child as usize];
-            for k in 0..2 {
-                if node.child_box(k).distance_squared(&q.point) <= bound {
+            for (k, d2) in node
+                .child_distances_squared(&q.point)
+                .into_iter()
+                .enumerate()
+            {
+                if d2 <= bound {
                     stack.push(node.child[k]);
                 }
             }
