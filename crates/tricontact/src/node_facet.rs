@@ -214,8 +214,8 @@ impl NodeFacet {
     /// Column `(b, s)` of the result is `W_s X_b + β N_b Y_s` with the 12-vectors
     /// `X_b = [c_ab W + β N_a G_b]_a` (`c_ab = α N_a N_b − β P G_a·G_b`) and `Y_s = [G_a,s W]_a`,
     /// which keeps the work in short vector loops.
-    /// A bound on every entry of [`NodeFacet::second_order`] and of `α P ∇P`:
-    /// `|α| M_N² + 2|β| M_N M_G + 3|β P| M_G² + |α P| M_N` with `M_N = max(1, |N_a|)` and
+    /// A bound on every entry of [`NodeFacet::second_order`] and of the force `β ∇P`:
+    /// `|α| M_N² + 2|β| M_N M_G + 3|β P| M_G² + |β| M_N` with `M_N = max(1, |N_a|)` and
     /// `M_G` the largest component of any `G_a` (so `|G_a·G_b| ≤ 3 M_G²`). When it is below `1e300` no entry can overflow, which spares callers a
     /// pass over the 156 outputs; otherwise they check every entry.
     pub(crate) fn second_order_bound(&self, alpha: f64, beta: f64) -> f64 {
@@ -229,7 +229,7 @@ impl NodeFacet {
         alpha.abs() * mn * mn
             + 2.0 * beta.abs() * mn * mg
             + 3.0 * beta.abs() * p * mg * mg
-            + alpha.abs() * p * mn
+            + beta.abs() * mn
     }
 
     /// `true` when [`NodeFacet::second_order_bound`] rules out overflow.

@@ -51,12 +51,25 @@ impl PenaltyTerms {
 /// # Errors
 /// [`GeometryError::Overflow`] if the force or tangent overflows (a non-finite `alpha` included).
 pub fn penalty(pair: &NodeFacet, alpha: f64) -> Result<PenaltyTerms, GeometryError> {
+    penalty_with(pair, alpha, alpha * pair.gap())
+}
+
+/// The force `λ̂∇P` and tangent `α∇P⊗∇P + λ̂∇²P` for a given force measure `λ̂`: the penalty
+/// method is `λ̂ = αP`, the augmented Lagrangian `λ̂ = λ_k + αP`.
+///
+/// # Errors
+/// [`GeometryError::Overflow`] if the force or tangent overflows.
+pub(crate) fn penalty_with(
+    pair: &NodeFacet,
+    alpha: f64,
+    lambda_hat: f64,
+) -> Result<PenaltyTerms, GeometryError> {
     let gap = pair.gap();
     let grad = pair.gap_gradient();
-    let stiffness = pair.second_order(alpha, alpha * gap);
-    let force = grad * (alpha * gap);
+    let stiffness = pair.second_order(alpha, lambda_hat);
+    let force = grad * lambda_hat;
     let checked =
-        pair.cannot_overflow(alpha, alpha * gap) || (all_finite(&stiffness) && all_finite(&force));
+        pair.cannot_overflow(alpha, lambda_hat) || (all_finite(&stiffness) && all_finite(&force));
     if !checked {
         return Err(GeometryError::Overflow);
     }

@@ -149,3 +149,97 @@ fn slave_node_is_pushed_out_along_the_normal() {
     assert!((t.resistance(0) - Vec3::new(0.0, 0.0, -5.0)).norm() < 1e-12);
     assert!((t.resistance(1) - Vec3::new(0.0, 0.0, -2.5)).norm() < 1e-12);
 }
+
+mod contact_enforcement {
+    use super::*;
+    use tricontact::contact::{augmented, multiplier_block};
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(CASES))]
+
+        /// The augmented-Lagrangian force is the gradient of `(1/2α) min(0, λ_k + αP)²` and its
+        /// tangent the derivative of the force.
+        #[test]
+        fn augmented_terms_are_consistent(x in pair(), lk in -5.0..0.0f64) {
+            let a = alpha(&x);
+            let lambda_k = lk * a * facet_size(&x);
+            let h = REL_STEP * facet_size(&x);
+            let energy = |y: &Vec12| {
+                let m = (lambda_k + a * pair_at(y).gap()).min(0.0);
+                0.5 * m * m / a
+            };
+            let exact = augmented(&pair_at(&x), lambda_k, a).unwrap();
+            // Away from the switch λ̂ = 0 the energy is smooth.
+            prop_assume!(exact.lambda_hat.abs() > 1e-3 * a * facet_size(&x));
+            let scale = a * facet_size(&x);
+            let fd = fd_gradient(energy, &x, h);
+            prop_assert!(rel_err_floor(&fd, &exact.force, scale) <= TOL);
+            let fd = fd_jacobian(|y| augmented(&pair_at(y), lambda_k, a).unwrap().force, &x, h);
+            prop_assert!(rel_err_floor(&fd, &exact.stiffness, a) <= TOL);
+            prop_assert_eq!(exact.updated_multiplier(), exact.lambda_hat.min(0.0));
+            if exact.lambda_hat >= 0.0 {
+                prop_assert_eq!(exact.force, Vec12::zeros());
+            }
+        }
+
+        /// The active multiplier block is the derivative of `(λ∇P, P)`; the inactive one enforces
+        /// `λ = 0`; the switch is `κP < −λ`.
+        #[test]
+        fn multiplier_block_is_consistent(x in pair(), l in -3.0..3.0f64) {
+            let kappa = alpha(&x);
+            let lambda = l * kappa * facet_size(&x) * 0.1;
+            let p = pair_at(&x);
+            let b = multiplier_block(&p, lambda, kappa).unwrap();
+            prop_assert_eq!(b.active, kappa * p.gap() < -lambda);
+            let h = REL_STEP * facet_size(&x);
+            if b.active {
+                prop_assert_eq!(b.residual_lambda, p.gap());
+                let fd = fd_jacobian(|y| pair_at(y).gap_gradient() * lambda, &x, h);
+                prop_assert!(rel_err_floor(&fd, &b.k_uu, lambda.abs() / facet_size(&x)) <= TOL);
+                let fd = fd_gradient(|y| pair_at(y).gap(), &x, h);
+                prop_assert!(rel_err(&fd, &b.k_ulambda) <= TOL);
+                prop_assert_eq!(b.k_lambdalambda, 0.0);
+            } else {
+                prop_assert!((b.residual_lambda * kappa - lambda).abs() <= 1e-15 * lambda.abs());
+                prop_assert!((b.k_lambdalambda * kappa - 1.0).abs() <= 1e-15);
+                prop_assert_eq!(b.k_ulambda, Vec12::zeros());
+            }
+        }
+    }
+
+    #[test]
+    fn uzawa_iteration_drives_the_penetration_of_a_loaded_node_to_zero() {
+        // A slave node held by a spring of stiffness s pushed into a fixed facet with force F:
+        // equilibrium s (z − z0) + f_contact = 0 solved exactly per Uzawa step.
+        let (s, f_push, alpha) = (100.0, 50.0, 1e3);
+        let facet = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(2.0, 0.0, 0.0),
+            Vec3::new(0.0, 2.0, 0.0),
+        ];
+        let mut lambda_k = 0.0;
+        let mut gaps = Vec::new();
+        for _ in 0..8 {
+            // Solve s z + F + min(0, λ_k + α z) = 0 for the node height z (P = z) by Newton.
+            let mut z = 0.0;
+            for _ in 0..30 {
+                let pair =
+                    NodeFacet::new(facet[0], facet[1], facet[2], Vec3::new(0.5, 0.5, z)).unwrap();
+                let t = augmented(&pair, lambda_k, alpha).unwrap();
+                let r = s * z + f_push + t.force[11];
+                let k = s + t.stiffness[(11, 11)];
+                z -= r / k;
+            }
+            let pair =
+                NodeFacet::new(facet[0], facet[1], facet[2], Vec3::new(0.5, 0.5, z)).unwrap();
+            lambda_k = augmented(&pair, lambda_k, alpha)
+                .unwrap()
+                .updated_multiplier();
+            gaps.push(z);
+        }
+        // Each Uzawa step shrinks the penetration by s/(s+α); the multiplier tends to −F.
+        assert!(gaps[0] < 0.0 && gaps.windows(2).all(|w| w[1].abs() < w[0].abs()));
+        assert!(gaps[7].abs() < 1e-6 * gaps[0].abs());
+        assert!((lambda_k + f_push).abs() < 1e-5 * f_push);
+    }
+}
