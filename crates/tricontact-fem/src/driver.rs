@@ -1,0 +1,207 @@
+//! Steps and load increments with automatic cutback.
+//!
+//! Within step `s` the load factor `t` runs from 0 to 1. A load's amplitude
+//! goes linearly from its value at the end of the previous step (1 if it was
+//! active there, else 0) to 1 (active in `s`) or 0 (inactive). A
+//! constrained DOF goes linearly from its displacement at the start of the
+//! step to its target (0 for `fix`), reached at `t = 1`. DOFs of inactive
+//! boundaries are free.
+//!
+//! Increment control: start with `Δt = 1/increments`; on a [`Failure`] the
+//! state is restored to the last converged increment and `Δt` is halved (at
+//! most `max_cutbacks` times in a row); after two converged increments in a
+//! row `Δt` doubles back, up to its initial value. State (`u`) is committed
+//! only at converged increments.
+
+use crate::analysis::Analysis;
+use crate::assembly::{DofMap, ExtraTerms, Pattern};
+use crate::error::{FemError, Result};
+use crate::linsolve::LinearSolver;
+use crate::newton::{Failure, IncrementProblem, solve_increment};
+use crate::rigid::check_supports;
+
+/// What a converged increment reports to the observer.
+#[derive(Debug)]
+pub struct IncrementInfo<'a> {
+    /// Step index (0-based).
+    pub step: usize,
+    /// Step name.
+    pub step_name: &'a str,
+    /// Increment number within the step (1-based).
+    pub increment: usize,
+    /// Load factor within the step, 0..=1.
+    pub load_factor: f64,
+    /// Total time: step index + load factor.
+    pub time: f64,
+    /// Newton iterations (linear solves).
+    pub iterations: usize,
+    /// Residual norms (predictor, then each iteration).
+    pub residuals: &'a [f64],
+    /// Reference norm of the relative residual test.
+    pub reference: f64,
+    /// Cutbacks taken before this increment converged.
+    pub cutbacks: usize,
+    /// Displacements over global DOFs (`3a + i`, then extra unknowns).
+    pub u: &'a [f64],
+    /// Reaction forces at prescribed DOFs (0 elsewhere), global DOFs.
+    pub reactions: &'a [f64],
+    /// Finite strain.
+    pub nlgeom: bool,
+    /// Factorization used last.
+    pub method: &'a str,
+}
+
+/// Totals of a run.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RunSummary {
+    /// Converged increments.
+    pub increments: usize,
+    /// Newton iterations.
+    pub iterations: usize,
+    /// Cutbacks.
+    pub cutbacks: usize,
+    /// Final displacements.
+    pub u: Vec<f64>,
+}
+
+/// Prescribed mask and targets of a step.
+#[must_use]
+pub fn step_constraints(an: &Analysis, s: usize) -> (Vec<bool>, Vec<(usize, f64)>) {
+    let mut mask = vec![false; an.num_nodal_dofs()];
+    let mut targets = Vec::new();
+    for b in an.boundaries.iter().filter(|b| b.active[s]) {
+        for &a in &b.nodes {
+            for (i, v) in b.values.iter().enumerate() {
+                if let Some(v) = v {
+                    let dof = 3 * a + i;
+                    if !mask[dof] {
+                        mask[dof] = true;
+                        targets.push((dof, *v));
+                    }
+                }
+            }
+        }
+    }
+    targets.sort_by_key(|t| t.0);
+    (mask, targets)
+}
+
+/// External force vector (global DOFs) in step `s` at load factor `t`.
+#[must_use]
+pub fn external_forces(an: &Analysis, n_dofs: usize, s: usize, t: f64) -> Vec<f64> {
+    let mut f = vec![0.0; n_dofs];
+    for l in &an.loads {
+        let prev = if s > 0 && l.active[s - 1] { 1.0 } else { 0.0 };
+        let target = if l.active[s] { 1.0 } else { 0.0 };
+        let amp = prev + t * (target - prev);
+        if amp == 0.0 {
+            continue;
+        }
+        for (a, v) in &l.forces {
+            for i in 0..3 {
+                f[3 * a + i] += amp * v[i];
+            }
+        }
+    }
+    f
+}
+
+/// Runs all steps; `observer` sees each converged increment.
+///
+/// # Errors
+/// Singular model, non-convergence after all cutbacks, observer errors.
+pub fn run(
+    an: &Analysis,
+    extra: &dyn ExtraTerms,
+    observer: &mut dyn FnMut(&IncrementInfo<'_>) -> Result<()>,
+) -> Result<RunSummary> {
+    let n_dofs = an.num_nodal_dofs() + extra.num_extra();
+    let mut u = vec![0.0; n_dofs];
+    let mut summary = RunSummary::default();
+    for (s, step) in an.steps.iter().enumerate() {
+        let (mask, targets) = step_constraints(an, s);
+        if extra.num_extra() == 0 {
+            check_supports(an, &mask)
+                .map_err(|m| FemError::Singular(format!("step '{}': {m}", step.name)))?;
+        }
+        let dm = DofMap::new(&an.active_nodes, &mask, extra.num_extra());
+        let pat = Pattern::new(an, &dm);
+        let mut solver = LinearSolver::new();
+        let u_step = u.clone();
+        let dt0 = 1.0 / step.increments as f64;
+        let mut dt = dt0;
+        let mut t = 0.0;
+        let mut increment = 0;
+        let mut cutbacks_here = 0usize;
+        let mut streak = 0usize;
+        while t < 1.0 - 1e-12 {
+            let t_new = if t + dt > 1.0 - 1e-9 { 1.0 } else { t + dt };
+            let fext = external_forces(an, n_dofs, s, t_new);
+            let prescribed: Vec<(usize, f64)> = targets
+                .iter()
+                .map(|&(dof, v)| (dof, u_step[dof] + t_new * (v - u_step[dof])))
+                .collect();
+            let problem = IncrementProblem {
+                an,
+                dm: &dm,
+                pat: &pat,
+                extra,
+                step,
+                fext: &fext,
+                prescribed: &prescribed,
+            };
+            match solve_increment(&problem, &u, &mut solver) {
+                Ok(c) => {
+                    u = c.u;
+                    t = t_new;
+                    increment += 1;
+                    summary.increments += 1;
+                    summary.iterations += c.iterations;
+                    let mut reactions = vec![0.0; n_dofs];
+                    for &(dof, _) in &targets {
+                        reactions[dof] = c.residual[dof];
+                    }
+                    observer(&IncrementInfo {
+                        step: s,
+                        step_name: &step.name,
+                        increment,
+                        load_factor: t,
+                        time: s as f64 + t,
+                        iterations: c.iterations,
+                        residuals: &c.residuals,
+                        reference: c.reference,
+                        cutbacks: cutbacks_here,
+                        u: &u,
+                        reactions: &reactions,
+                        nlgeom: step.nlgeom,
+                        method: c.method,
+                    })?;
+                    cutbacks_here = 0;
+                    streak += 1;
+                    if streak >= 2 && dt < dt0 {
+                        dt = (2.0 * dt).min(dt0);
+                        streak = 0;
+                    }
+                }
+                Err(failure) => {
+                    if let (Failure::Singular(m), false) = (&failure, step.nlgeom) {
+                        return Err(FemError::Singular(format!("step '{}': {m}", step.name)));
+                    }
+                    cutbacks_here += 1;
+                    summary.cutbacks += 1;
+                    streak = 0;
+                    if cutbacks_here > step.max_cutbacks {
+                        return Err(FemError::NotConverged {
+                            step: step.name.clone(),
+                            load_factor: t,
+                            reason: format!("{failure} (after {} cutbacks)", step.max_cutbacks),
+                        });
+                    }
+                    dt /= 2.0;
+                }
+            }
+        }
+    }
+    summary.u = u;
+    Ok(summary)
+}
