@@ -201,6 +201,8 @@ pub fn box_mesh(size: [f64; 3], n: [usize; 3], kind: ElementKind) -> Mesh {
 
 /// Moves every node not on the box boundary by a deterministic pseudo-random
 /// offset of at most `amount` (a fraction of the smallest brick edge).
+/// Tet10 edge nodes are then put back at the midpoints of their (moved)
+/// corners, so elements stay straight-sided (affine).
 pub fn distort_interior(mesh: &mut Mesh, size: [f64; 3], n: [usize; 3], amount: f64) {
     let h = (0..3)
         .map(|i| size[i] / n[i] as f64)
@@ -218,6 +220,14 @@ pub fn distort_interior(mesh: &mut Mesh, size: [f64; 3], n: [usize; 3], amount: 
         if interior {
             for i in 0..3 {
                 p[i] += amount * h * d[i];
+            }
+        }
+    }
+    for e in &mesh.elements {
+        if e.kind == ElementKind::Tet10 {
+            for (k, [a, b]) in crate::tet10::EDGES.iter().enumerate() {
+                let (p, q) = (mesh.nodes[e.nodes[*a]], mesh.nodes[e.nodes[*b]]);
+                mesh.nodes[e.nodes[4 + k]] = [(p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0, (p[2] + q[2]) / 2.0];
             }
         }
     }
