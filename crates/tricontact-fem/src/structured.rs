@@ -227,7 +227,11 @@ pub fn distort_interior(mesh: &mut Mesh, size: [f64; 3], n: [usize; 3], amount: 
         if e.kind == ElementKind::Tet10 {
             for (k, [a, b]) in crate::tet10::EDGES.iter().enumerate() {
                 let (p, q) = (mesh.nodes[e.nodes[*a]], mesh.nodes[e.nodes[*b]]);
-                mesh.nodes[e.nodes[4 + k]] = [(p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0, (p[2] + q[2]) / 2.0];
+                mesh.nodes[e.nodes[4 + k]] = [
+                    (p[0] + q[0]) / 2.0,
+                    (p[1] + q[1]) / 2.0,
+                    (p[2] + q[2]) / 2.0,
+                ];
             }
         }
     }

@@ -65,7 +65,10 @@ fn errors(kind: ElementKind, meshes: &[[usize; 3]]) -> Vec<f64> {
             // Sum of reactions balances the applied load.
             let r = last.reactions[0];
             assert!((r[1] - P).abs() <= 1e-9 * P, "reaction {r:?}");
-            assert!(r[0].abs() <= 1e-9 * P && r[2].abs() <= 1e-9 * P, "reaction {r:?}");
+            assert!(
+                r[0].abs() <= 1e-9 * P && r[2].abs() <= 1e-9 * P,
+                "reaction {r:?}"
+            );
             let err = (tip_deflection(&an, &last.u) - exact).abs() / exact;
             eprintln!("{kind:?} {n:?}: tip deflection error {err:.4e}");
             err
@@ -94,7 +97,10 @@ fn newton_converges_quadratically_at_finite_strain() {
     let an = beam(ElementKind::Hex8, [10, 2, 2], "neo_hooke", 0.3, 1.0, step);
     let (_, rec) = common::solve(&an);
     let last = rec.last().expect("converged");
-    assert!(tip_deflection(&an, &last.u) > 2.0, "large deflection expected");
+    assert!(
+        tip_deflection(&an, &last.u) > 2.0,
+        "large deflection expected"
+    );
     let mut checked = 0;
     for r in &rec {
         let e: Vec<f64> = r.residuals.iter().map(|x| x / r.residuals[0]).collect();
@@ -110,7 +116,11 @@ fn newton_converges_quadratically_at_finite_strain() {
         assert!(r.iterations <= 8, "too many iterations: {e:?}");
         // Reactions balance the applied load at every converged increment.
         let applied = r.load_factor;
-        assert!((r.reactions[0][1] - applied).abs() <= 1e-8 * applied, "{:?}", r.reactions);
+        assert!(
+            (r.reactions[0][1] - applied).abs() <= 1e-8 * applied,
+            "{:?}",
+            r.reactions
+        );
     }
     assert!(checked >= 1, "no iteration pair in the asymptotic range");
 }
@@ -119,7 +129,10 @@ fn newton_converges_quadratically_at_finite_strain() {
 fn results_do_not_depend_on_thread_count() {
     let step = "nlgeom = true\nincrements = 2";
     let run_with = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
         pool.install(|| {
             let an = beam(ElementKind::Tet10, [6, 2, 2], "neo_hooke", 0.3, 1.0, step);
             common::solve(&an).1.last().expect("converged").u.clone()
@@ -127,6 +140,12 @@ fn results_do_not_depend_on_thread_count() {
     };
     let (u1, u2) = (run_with(1), run_with(2));
     let scale = u1.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let diff = u1.iter().zip(&u2).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-    assert!(diff <= 1e-12 * scale, "difference {diff:e} (scale {scale:e})");
+    let diff = u1
+        .iter()
+        .zip(&u2)
+        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    assert!(
+        diff <= 1e-12 * scale,
+        "difference {diff:e} (scale {scale:e})"
+    );
 }

@@ -18,7 +18,9 @@ const E: f64 = 10.0;
 const NU: f64 = 0.3;
 
 fn material_text() -> String {
-    format!("[[material]]\nname = \"rubber\"\ntype = \"neo_hooke\"\nE = {E}\nnu = {NU}\n[[body]]\ngroup = \"solid\"\nmaterial = \"rubber\"\n")
+    format!(
+        "[[material]]\nname = \"rubber\"\ntype = \"neo_hooke\"\nE = {E}\nnu = {NU}\n[[body]]\ngroup = \"solid\"\nmaterial = \"rubber\"\n"
+    )
 }
 
 #[test]
@@ -58,16 +60,31 @@ fn uniaxial_stretch_two() {
             .expect("corner");
         for i in [1, 2] {
             let got = last.u[3 * corner + i];
-            assert!((got - (a - 1.0)).abs() <= 1e-9, "{kind:?}: lateral {got} vs {}", a - 1.0);
+            assert!(
+                (got - (a - 1.0)).abs() <= 1e-9,
+                "{kind:?}: lateral {got} vs {}",
+                a - 1.0
+            );
         }
         // Reaction on the loaded face equals P11 × reference area 1.
         let rx = last.reactions[3][0];
-        assert!((rx - p11).abs() <= 1e-9 * p11.abs(), "{kind:?}: force {rx} vs {p11}");
+        assert!(
+            (rx - p11).abs() <= 1e-9 * p11.abs(),
+            "{kind:?}: force {rx} vs {p11}"
+        );
         let f = stress_fields(&an, &last.u, true);
         for cell in f.cell_stress.chunks(6) {
-            assert!((cell[0] - s11).abs() <= 1e-9 * s11, "{kind:?}: σ11 {} vs {s11}", cell[0]);
+            assert!(
+                (cell[0] - s11).abs() <= 1e-9 * s11,
+                "{kind:?}: σ11 {} vs {s11}",
+                cell[0]
+            );
             for c in 1..6 {
-                assert!(cell[c].abs() <= 1e-9 * s11, "{kind:?}: σ[{c}] = {}", cell[c]);
+                assert!(
+                    cell[c].abs() <= 1e-9 * s11,
+                    "{kind:?}: σ[{c}] = {}",
+                    cell[c]
+                );
             }
         }
     }

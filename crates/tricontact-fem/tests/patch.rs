@@ -12,7 +12,11 @@ use tricontact_fem::mesh::ElementKind;
 use tricontact_fem::results::stress_fields;
 use tricontact_fem::structured::{box_mesh, distort_interior};
 
-const A: [[f64; 3]; 3] = [[0.012, 0.004, -0.003], [0.002, -0.006, 0.005], [-0.004, 0.003, 0.009]];
+const A: [[f64; 3]; 3] = [
+    [0.012, 0.004, -0.003],
+    [0.002, -0.006, 0.005],
+    [-0.004, 0.003, 0.009],
+];
 const B: [f64; 3] = [0.01, -0.02, 0.005];
 
 fn run_patch(kind: ElementKind, law: &str, nlgeom: bool, scale: f64) {
@@ -56,14 +60,28 @@ fn run_patch(kind: ElementKind, law: &str, nlgeom: bool, scale: f64) {
             umax = umax.max(exact[i].abs());
         }
     }
-    assert!(err <= 1e-10 * umax, "{kind:?} {law} nlgeom={nlgeom}: displacement error {err:e}");
+    assert!(
+        err <= 1e-10 * umax,
+        "{kind:?} {law} nlgeom={nlgeom}: displacement error {err:e}"
+    );
     // Constant stress equal to the material response to H = A.
-    let law_e = if law == "neo_hooke" { Law::NeoHooke } else { Law::LinearElastic };
+    let law_e = if law == "neo_hooke" {
+        Law::NeoHooke
+    } else {
+        Law::LinearElastic
+    };
     let mat = Material::from_e_nu(law_e, e, nu);
     let h = Matrix3::from_fn(|i, j| a[i][j]);
     let (p, _) = mat.response(&h, nlgeom).expect("admissible");
     let sigma = cauchy(&p, &h, nlgeom);
-    let expect = [sigma[(0, 0)], sigma[(1, 1)], sigma[(2, 2)], sigma[(0, 1)], sigma[(1, 2)], sigma[(0, 2)]];
+    let expect = [
+        sigma[(0, 0)],
+        sigma[(1, 1)],
+        sigma[(2, 2)],
+        sigma[(0, 1)],
+        sigma[(1, 2)],
+        sigma[(0, 2)],
+    ];
     let fields = stress_fields(&an, u, nlgeom);
     let smax = sigma.abs().max();
     for cell in fields.cell_stress.chunks(6) {

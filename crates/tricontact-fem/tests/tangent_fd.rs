@@ -17,7 +17,9 @@ fn pseudo_random(seed: u64, n: usize) -> Vec<f64> {
     let mut s = seed;
     (0..n)
         .map(|_| {
-            s = s.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            s = s
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
             ((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
         })
         .collect()
@@ -41,7 +43,13 @@ fn check_element(kind: ElementKind, law: Law, nlgeom: bool) -> f64 {
         })
         .collect();
     let u: Vec<[f64; 3]> = (0..n)
-        .map(|a| [0.05 * r[3 * n + 3 * a], 0.05 * r[3 * n + 3 * a + 1], 0.05 * r[3 * n + 3 * a + 2]])
+        .map(|a| {
+            [
+                0.05 * r[3 * n + 3 * a],
+                0.05 * r[3 * n + 3 * a + 1],
+                0.05 * r[3 * n + 3 * a + 2],
+            ]
+        })
         .collect();
     let nd = 3 * n;
     let mut f = vec![0.0; nd];
@@ -73,7 +81,10 @@ fn element_tangents_match_central_differences() {
         for law in [Law::LinearElastic, Law::NeoHooke] {
             for nlgeom in [false, true] {
                 let rel = check_element(kind, law, nlgeom);
-                assert!(rel <= 1e-6, "{kind:?} {law:?} nlgeom={nlgeom}: relative error {rel:e}");
+                assert!(
+                    rel <= 1e-6,
+                    "{kind:?} {law:?} nlgeom={nlgeom}: relative error {rel:e}"
+                );
             }
         }
     }
@@ -124,8 +135,12 @@ nlgeom = true
         let mut um = u.clone();
         up[dof] += h;
         um[dof] -= h;
-        let rp = assemble(&an, &dm, &pat, &up, true, false, None, &NoExtra).expect("ok").residual;
-        let rm = assemble(&an, &dm, &pat, &um, true, false, None, &NoExtra).expect("ok").residual;
+        let rp = assemble(&an, &dm, &pat, &up, true, false, None, &NoExtra)
+            .expect("ok")
+            .residual;
+        let rm = assemble(&an, &dm, &pat, &um, true, false, None, &NoExtra)
+            .expect("ok")
+            .residual;
         let mut dense_col = vec![0.0; dm.n_eq];
         let (cp, ri, vals) = (k.as_ref().col_ptr(), k.as_ref().row_idx(), k.as_ref().val());
         for p in cp[c]..cp[c + 1] {
