@@ -2,6 +2,7 @@
 //! NaN result: malformed TOML, unknown group, missing mesh file,
 //! unsupported element type, unsupported body, inverted and zero-volume
 //! elements.
+#![allow(clippy::needless_range_loop)]
 
 use std::path::{Path, PathBuf};
 

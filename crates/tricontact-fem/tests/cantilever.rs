@@ -4,6 +4,7 @@
 //! 3D solution has no Poisson coupling. Also: equilibrium of reactions and
 //! applied load, quadratic Newton convergence at finite strain, and
 //! independence of the result from the number of threads.
+#![allow(clippy::needless_range_loop)]
 
 mod common;
 

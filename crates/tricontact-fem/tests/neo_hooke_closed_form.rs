@@ -6,6 +6,7 @@
 //! `σ₁₁ = P₁₁ λ₁ / J`, `J = λ₁ a²`.
 //! Simple shear `γ = 1.5` (largest principal stretch 2): `J = 1`,
 //! `σ = μ (b − I)`: `σ₁₂ = μ γ`, `σ₁₁ = μ γ²`, `σ₂₂ = σ₃₃ = 0`.
+#![allow(clippy::needless_range_loop)]
 
 mod common;
 

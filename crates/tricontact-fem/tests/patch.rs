@@ -3,6 +3,7 @@
 //! give the constant stress `σ(A)` in every element, to round-off — for
 //! every element kind (tet10 distorted with straight edges), small strain and (with the homogeneous deformation
 //! `F = I + A`) finite-strain neo-Hooke.
+#![allow(clippy::needless_range_loop)]
 
 mod common;
 

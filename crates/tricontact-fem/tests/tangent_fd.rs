@@ -3,6 +3,7 @@
 //! elements with a sizeable displacement field; and the assembled global
 //! tangent (with prescribed DOFs eliminated) against differences of the
 //! assembled residual.
+#![allow(clippy::needless_range_loop)]
 
 mod common;
 
