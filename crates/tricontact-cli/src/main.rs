@@ -176,12 +176,10 @@ fn check(model_path: &Path) -> Result<(), FemError> {
         if problems.is_empty()
             && let Err(m) = rigid::check_supports(&an, &mask)
         {
-            {
-                problems.push(FemError::Singular(format!(
-                    "step '{}': {m}",
-                    an.steps[s].name
-                )));
-            }
+            problems.push(FemError::Singular(format!(
+                "step '{}': {m}",
+                an.steps[s].name
+            )));
         }
     }
     if problems.is_empty() {
@@ -192,9 +190,12 @@ fn check(model_path: &Path) -> Result<(), FemError> {
         for p in &problems {
             println!("  - {p}");
         }
-        Err(FemError::Invalid(vec![format!(
-            "{} problem(s) found",
-            problems.len()
-        )]))
+        if problems.len() == 1 {
+            Err(problems.remove(0))
+        } else {
+            Err(FemError::Invalid(
+                problems.iter().map(ToString::to_string).collect(),
+            ))
+        }
     }
 }
