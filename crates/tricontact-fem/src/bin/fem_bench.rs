@@ -1,1 +1,118 @@
-fn main() {}
+//! Benchmark of the linear-system pipeline on a structured hex8 cube:
+//! assembly (parallel element loop + deterministic merge), symbolic
+//! analysis, numeric Cholesky factorization and triangular solve, timed
+//! separately.
+//!
+//! `cargo run --release -p tricontact-fem --bin fem-bench [-- N]` uses
+//! `N × N × N` bricks (default 45: 97 336 nodes, ≈ 290 000 free DOFs).
+
+use std::time::Instant;
+
+use tricontact_fem::analysis::Analysis;
+use tricontact_fem::assembly::{DofMap, NoExtra, Pattern, assemble};
+use tricontact_fem::driver::{external_forces, step_constraints};
+use tricontact_fem::linsolve::LinearSolver;
+use tricontact_fem::mesh::ElementKind;
+use tricontact_fem::model::Model;
+use tricontact_fem::structured::box_mesh;
+
+fn main() {
+    let n: usize = std::env::args()
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(45);
+    let t = Instant::now();
+    let mesh = box_mesh([1.0, 1.0, 1.0], [n, n, n], ElementKind::Hex8);
+    let text = "[mesh]\nfile = \"none\"\n[[material]]\nname = \"m\"\ntype = \"linear_elastic\"\nE = 1000.0\nnu = 0.3\n[[body]]\ngroup = \"solid\"\nmaterial = \"m\"\n[[boundary]]\ngroup = \"zmin\"\nfix = [\"x\", \"y\", \"z\"]\n[[load]]\ngroup = \"zmax\"\npressure = 1.0\n[[step]]\n";
+    let model = match Model::parse(text, std::path::Path::new("bench.toml")) {
+        Ok(m) => m,
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::exit(1);
+        }
+    };
+    let an = match Analysis::new(&model, mesh) {
+        Ok(a) => a,
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::exit(1);
+        }
+    };
+    let setup = t.elapsed();
+    let (mask, _) = step_constraints(&an, 0);
+    let dm = DofMap::new(&an.active_nodes, &mask, 0);
+    let t = Instant::now();
+    let pat = Pattern::new(&an, &dm);
+    let t_pattern = t.elapsed();
+    let u = vec![0.0; an.num_nodal_dofs()];
+    let t = Instant::now();
+    let asm = match assemble(&an, &dm, &pat, &u, false, true, None, &NoExtra) {
+        Ok(a) => a,
+        Err(e) => {
+            eprintln!("error: inverted element {}", e.0);
+            std::process::exit(1);
+        }
+    };
+    let t_assembly = t.elapsed();
+    let k = asm.matrix(&pat);
+    let f = external_forces(&an, an.num_nodal_dofs(), 0, 1.0);
+    let mut rhs = vec![0.0; dm.n_eq];
+    for (dof, &e) in dm.eq.iter().enumerate() {
+        if e != tricontact_fem::assembly::NO_EQ {
+            rhs[e] = f[dof];
+        }
+    }
+    let mut solver = LinearSolver::new();
+    let t = Instant::now();
+    if let Err(e) = solver.analyze(k.as_ref()) {
+        eprintln!("error: {}", e.0);
+        std::process::exit(1);
+    }
+    let t_symbolic = t.elapsed();
+    let t = Instant::now();
+    let factor = match solver.factor(k.as_ref(), true) {
+        Ok(f) => f,
+        Err(e) => {
+            eprintln!("error: {}", e.0);
+            std::process::exit(1);
+        }
+    };
+    let t_numeric = t.elapsed();
+    let t = Instant::now();
+    let x = factor.solve(&rhs);
+    let t_solve = t.elapsed();
+    // Residual check ‖K x − b‖ / ‖b‖.
+    let kr = k.as_ref();
+    let mut ax = vec![0.0; dm.n_eq];
+    for c in 0..dm.n_eq {
+        for p in kr.col_ptr()[c]..kr.col_ptr()[c + 1] {
+            ax[kr.row_idx()[p]] += kr.val()[p] * x[c];
+        }
+    }
+    let res = ax
+        .iter()
+        .zip(&rhs)
+        .map(|(a, b)| (a - b).powi(2))
+        .sum::<f64>()
+        .sqrt()
+        / rhs.iter().map(|b| b * b).sum::<f64>().sqrt();
+    println!(
+        "hex8 cube {n}^3: {} elements, {} nodes, {} free DOFs, {} nonzeros",
+        an.body.len(),
+        an.mesh.nodes.len(),
+        dm.n_eq,
+        kr.val().len()
+    );
+    println!("threads:            {}", rayon::current_num_threads());
+    println!("setup (mesh+model): {:>8.3} s", setup.as_secs_f64());
+    println!("sparsity pattern:   {:>8.3} s", t_pattern.as_secs_f64());
+    println!("assembly:           {:>8.3} s", t_assembly.as_secs_f64());
+    println!("symbolic analysis:  {:>8.3} s", t_symbolic.as_secs_f64());
+    println!(
+        "numeric factor:     {:>8.3} s  ({})",
+        t_numeric.as_secs_f64(),
+        factor.method()
+    );
+    println!("solve:              {:>8.3} s", t_solve.as_secs_f64());
+    println!("relative residual:  {res:.2e}");
+}
