@@ -84,9 +84,9 @@ fn main() {
     // Residual check ‖K x − b‖ / ‖b‖.
     let kr = k.as_ref();
     let mut ax = vec![0.0; dm.n_eq];
-    for c in 0..dm.n_eq {
+    for (c, xc) in x.iter().enumerate() {
         for p in kr.col_ptr()[c]..kr.col_ptr()[c + 1] {
-            ax[kr.row_idx()[p]] += kr.val()[p] * x[c];
+            ax[kr.row_idx()[p]] += kr.val()[p] * xc;
         }
     }
     let res = ax
