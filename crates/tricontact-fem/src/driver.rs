@@ -64,6 +64,67 @@ pub struct RunSummary {
     pub u: Vec<f64>,
 }
 
+/// Increment-size control of one step (see the module doc).
+#[derive(Clone, Debug, PartialEq)]
+pub struct IncrementControl {
+    /// Initial (and largest) increment.
+    pub dt0: f64,
+    /// Current increment.
+    pub dt: f64,
+    /// Converged increments in a row since the last failure or growth.
+    pub streak: usize,
+    /// Cutbacks of the increment being attempted.
+    pub cutbacks_here: usize,
+    /// Allowed cutbacks per increment.
+    pub max_cutbacks: usize,
+}
+
+impl IncrementControl {
+    /// `increments` equal increments initially.
+    #[must_use]
+    pub fn new(increments: usize, max_cutbacks: usize) -> Self {
+        let dt0 = 1.0 / increments.max(1) as f64;
+        Self {
+            dt0,
+            dt: dt0,
+            streak: 0,
+            cutbacks_here: 0,
+            max_cutbacks,
+        }
+    }
+
+    /// Load factor at the end of the next increment from `t` (snaps to 1).
+    #[must_use]
+    pub fn target(&self, t: f64) -> f64 {
+        if t + self.dt > 1.0 - 1e-9 {
+            1.0
+        } else {
+            t + self.dt
+        }
+    }
+
+    /// Records a converged increment; doubles `dt` (up to `dt0`) after two
+    /// in a row.
+    pub fn converged(&mut self) {
+        self.cutbacks_here = 0;
+        self.streak += 1;
+        if self.streak >= 2 && self.dt < self.dt0 {
+            self.dt = (2.0 * self.dt).min(self.dt0);
+            self.streak = 0;
+        }
+    }
+
+    /// Records a failed attempt: halves `dt`; `false` when the cutbacks of
+    /// this increment are exhausted.
+    #[must_use]
+    pub fn failed(&mut self) -> bool {
+        self.cutbacks_here += 1;
+        self.streak = 0;
+        self.dt /= 2.0;
+        self.cutbacks_here <= self.max_cutbacks
+    }
+}
+
 /// Prescribed mask and targets of a step.
 #[must_use]
 pub fn step_constraints(an: &Analysis, s: usize) -> (Vec<bool>, Vec<(usize, f64)>) {
@@ -128,14 +189,11 @@ pub fn run(
         let pat = Pattern::new(an, &dm);
         let mut solver = LinearSolver::new();
         let u_step = u.clone();
-        let dt0 = 1.0 / step.increments as f64;
-        let mut dt = dt0;
+        let mut control = IncrementControl::new(step.increments, step.max_cutbacks);
         let mut t = 0.0;
         let mut increment = 0;
-        let mut cutbacks_here = 0usize;
-        let mut streak = 0usize;
         while t < 1.0 - 1e-12 {
-            let t_new = if t + dt > 1.0 - 1e-9 { 1.0 } else { t + dt };
+            let t_new = control.target(t);
             let fext = external_forces(an, n_dofs, s, t_new);
             let prescribed: Vec<(usize, f64)> = targets
                 .iter()
@@ -170,38 +228,64 @@ pub fn run(
                         iterations: c.iterations,
                         residuals: &c.residuals,
                         reference: c.reference,
-                        cutbacks: cutbacks_here,
+                        cutbacks: control.cutbacks_here,
                         u: &u,
                         reactions: &reactions,
                         nlgeom: step.nlgeom,
                         method: c.method,
                     })?;
-                    cutbacks_here = 0;
-                    streak += 1;
-                    if streak >= 2 && dt < dt0 {
-                        dt = (2.0 * dt).min(dt0);
-                        streak = 0;
-                    }
+                    control.converged();
                 }
                 Err(failure) => {
                     if let (Failure::Singular(m), false) = (&failure, step.nlgeom) {
                         return Err(FemError::Singular(format!("step '{}': {m}", step.name)));
                     }
-                    cutbacks_here += 1;
                     summary.cutbacks += 1;
-                    streak = 0;
-                    if cutbacks_here > step.max_cutbacks {
+                    if !control.failed() {
                         return Err(FemError::NotConverged {
                             step: step.name.clone(),
                             load_factor: t,
                             reason: format!("{failure} (after {} cutbacks)", step.max_cutbacks),
                         });
                     }
-                    dt /= 2.0;
                 }
             }
         }
     }
     summary.u = u;
     Ok(summary)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn halves_on_failure_and_grows_back_after_two_successes() {
+        let mut c = IncrementControl::new(4, 2);
+        assert!((c.target(0.0) - 0.25).abs() < 1e-15);
+        assert!(c.failed());
+        assert!(c.failed());
+        assert!((c.dt - 0.0625).abs() < 1e-15);
+        assert!(!c.failed(), "third cutback exceeds max_cutbacks = 2");
+        let mut c = IncrementControl::new(4, 2);
+        assert!(c.failed() && c.failed());
+        c.converged();
+        assert!((c.dt - 0.0625).abs() < 1e-15, "one success: no growth");
+        c.converged();
+        assert!((c.dt - 0.125).abs() < 1e-15);
+        c.converged();
+        c.converged();
+        assert!((c.dt - 0.25).abs() < 1e-15);
+        c.converged();
+        c.converged();
+        assert!(
+            (c.dt - 0.25).abs() < 1e-15,
+            "never beyond the initial increment"
+        );
+        assert!(
+            (c.target(0.9) - 1.0).abs() < 1e-15,
+            "snaps to the end of the step"
+        );
+    }
 }

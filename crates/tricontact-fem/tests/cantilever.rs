@@ -150,3 +150,61 @@ fn results_do_not_depend_on_thread_count() {
         "difference {diff:e} (scale {scale:e})"
     );
 }
+
+#[test]
+fn cutback_recovers_and_matches_a_fine_run() {
+    let tol = "residual_tolerance = 1e-10\ndisplacement_tolerance = 1e-10";
+    let hard = beam(
+        ElementKind::Hex8,
+        [10, 2, 2],
+        "neo_hooke",
+        0.3,
+        1.5,
+        &format!("nlgeom = true\nincrements = 1\nmax_iterations = 6\n{tol}"),
+    );
+    let (summary, rec) = common::solve(&hard);
+    let factors: Vec<f64> = rec.iter().map(|r| r.load_factor).collect();
+    eprintln!("cutbacks {} load factors {factors:?}", summary.cutbacks);
+    assert!(summary.cutbacks >= 1, "expected a cutback");
+    assert!((factors.last().copied().unwrap_or(0.0) - 1.0).abs() < 1e-12);
+    // Hyperelastic: the end state does not depend on the load path.
+    let fine = beam(
+        ElementKind::Hex8,
+        [10, 2, 2],
+        "neo_hooke",
+        0.3,
+        1.5,
+        &format!("nlgeom = true\nincrements = 10\n{tol}"),
+    );
+    let (_, rec_fine) = common::solve(&fine);
+    let (a, b) = (
+        &rec.last().expect("converged").u,
+        &rec_fine.last().expect("converged").u,
+    );
+    let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let diff = a
+        .iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+    assert!(diff <= 1e-7 * scale, "difference {diff:e}");
+}
+
+#[test]
+fn exhausted_cutbacks_are_reported() {
+    let an = beam(
+        ElementKind::Hex8,
+        [10, 2, 2],
+        "neo_hooke",
+        0.3,
+        1.5,
+        "nlgeom = true\nincrements = 1\nmax_iterations = 3\nmax_cutbacks = 1",
+    );
+    let e = tricontact_fem::driver::run(&an, &tricontact_fem::assembly::NoExtra, &mut |_| Ok(()))
+        .expect_err("must fail");
+    let msg = e.to_string();
+    assert!(
+        matches!(e, tricontact_fem::FemError::NotConverged { .. }),
+        "{msg}"
+    );
+    assert!(msg.contains("after 1 cutbacks"), "{msg}");
+}
