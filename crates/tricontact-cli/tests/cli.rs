@@ -131,3 +131,43 @@ fn failures_exit_non_zero_with_one_line() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("absent.toml"));
 }
+
+#[test]
+fn tet10_example_reactions_balance_the_pressure() {
+    let out = temp_dir("block");
+    let model =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/block-stretch/model.toml");
+    let o = bin()
+        .args(["run", model.to_str().expect("utf8"), "--output"])
+        .arg(&out)
+        .output()
+        .expect("runs");
+    assert!(
+        o.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let history = std::fs::read_to_string(out.join("history.csv")).expect("history");
+    let header: Vec<&str> = history.lines().next().expect("header").split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).expect("column");
+    let last: Vec<f64> = history
+        .lines()
+        .last()
+        .expect("row")
+        .split(',')
+        .enumerate()
+        .filter(|(i, _)| *i != 1)
+        .map(|(_, v)| v.parse().expect("number"))
+        .collect();
+    // Column indices shift by one after dropping step_name (index 1).
+    let get = |name: &str| last[col(name) - 1];
+    // Dead pressure 0.5 on the 2 × 1 top face pushes with 1.0 in −z.
+    let rz = get("left_Rz") + get("right_Rz");
+    assert!((rz - 1.0).abs() < 1e-6, "ΣRz = {rz}");
+    let rx = get("left_Rx") + get("right_Rx");
+    assert!(
+        rx.abs() < 1e-6 * get("right_Rx").abs().max(1.0),
+        "ΣRx = {rx}"
+    );
+    assert!(get("right_Rx") > 0.0, "stretching needs a positive force");
+}
