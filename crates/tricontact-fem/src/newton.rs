@@ -8,9 +8,10 @@
 //! Convergence (both must hold), with `r_ref = max(‖r⁰‖, ‖f_ext,f‖, ‖R‖)`
 //! (`R` the reactions) and `Δu = u − u_committed`:
 //! * `‖r_f‖ ≤ tol_r · r_ref`;
-//! * `‖δu_last‖ · min(1, ‖r_f^k‖/‖r_f^{k−1}‖) ≤ tol_u · ‖Δu‖` — the last
-//!   correction scaled by the observed contraction, an estimate of the next
-//!   one (so a linear problem converges after one solve).
+//! * `‖δu_last‖ · min(1, ‖r_f^k‖/‖r_f^{k−1}‖) ≤ tol_u · max(‖Δu‖, 10⁻³‖u‖)`
+//!   — the last correction scaled by the observed contraction, an estimate
+//!   of the next one (so a linear problem converges after one solve); the
+//!   floor `10⁻³‖u‖` keeps increments that change nothing from stalling.
 //!
 //! Failure (triggers a cutback in [`crate::driver`]): no convergence within
 //! `max_iterations`, a non-finite or exploding residual (> 1e6 `r_ref`), an
@@ -153,7 +154,8 @@ pub fn solve_increment(
             } else {
                 0.0
             };
-            let du_total = norm(u.iter().zip(u0).map(|(a, b)| a - b));
+            let du_total =
+                norm(u.iter().zip(u0).map(|(a, b)| a - b)).max(1e-3 * norm(u.iter().copied()));
             if rnorm <= p.step.residual_tolerance * reference
                 && du_norm * ratio <= p.step.displacement_tolerance * du_total
             {
