@@ -91,6 +91,24 @@ impl DofMap {
     }
 }
 
+/// Sorted neighbour lists (self included) of every node through the body
+/// elements.
+#[must_use]
+pub fn node_adjacency(an: &Analysis) -> Vec<Vec<usize>> {
+    let mut adj: Vec<Vec<usize>> = vec![Vec::new(); an.mesh.nodes.len()];
+    for be in &an.body {
+        let nodes = &an.mesh.elements[be.element].nodes;
+        for &a in nodes {
+            adj[a].extend_from_slice(nodes);
+        }
+    }
+    adj.par_iter_mut().for_each(|v| {
+        v.sort_unstable();
+        v.dedup();
+    });
+    adj
+}
+
 /// Column-compressed sparsity of the element part of the tangent.
 #[derive(Clone, Debug)]
 pub struct Pattern {
@@ -102,18 +120,12 @@ impl Pattern {
     /// Builds the pattern from the node adjacency of the body elements.
     #[must_use]
     pub fn new(an: &Analysis, dm: &DofMap) -> Self {
-        let n_nodes = an.mesh.nodes.len();
-        let mut adj: Vec<Vec<usize>> = vec![Vec::new(); n_nodes];
-        for be in &an.body {
-            let nodes = &an.mesh.elements[be.element].nodes;
-            for &a in nodes {
-                adj[a].extend_from_slice(nodes);
-            }
-        }
-        adj.par_iter_mut().for_each(|v| {
-            v.sort_unstable();
-            v.dedup();
-        });
+        Self::from_adjacency(&node_adjacency(an), dm)
+    }
+
+    /// Builds the pattern from a node adjacency (see [`node_adjacency`]).
+    #[must_use]
+    pub fn from_adjacency(adj: &[Vec<usize>], dm: &DofMap) -> Self {
         let mut col_ptr = Vec::with_capacity(dm.n_eq + 1);
         let mut row_idx = Vec::new();
         col_ptr.push(0);

@@ -14,10 +14,11 @@
 //! only at converged increments.
 
 use crate::analysis::Analysis;
-use crate::assembly::{DofMap, ExtraTerms, Pattern};
+use crate::assembly::{DofMap, ExtraTerms, Pattern, node_adjacency};
 use crate::error::{FemError, Result};
 use crate::linsolve::LinearSolver;
 use crate::newton::{Failure, IncrementProblem, solve_increment};
+use crate::ordering::equation_order;
 use crate::rigid::check_supports;
 
 /// What a converged increment reports to the observer.
@@ -186,8 +187,10 @@ pub fn run(
                 .map_err(|m| FemError::Singular(format!("step '{}': {m}", step.name)))?;
         }
         let dm = DofMap::new(&an.active_nodes, &mask, extra.num_extra());
-        let pat = Pattern::new(an, &dm);
-        let mut solver = LinearSolver::new();
+        let adj = node_adjacency(an);
+        let pat = Pattern::from_adjacency(&adj, &dm);
+        let mut solver = LinearSolver::new().with_order(equation_order(&an.mesh.nodes, &adj, &dm));
+        drop(adj);
         let u_step = u.clone();
         let mut control = IncrementControl::new(step.increments, step.max_cutbacks);
         let mut t = 0.0;

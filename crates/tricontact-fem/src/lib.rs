@@ -27,6 +27,7 @@ pub mod mesh;
 pub mod model;
 pub mod neo_hooke;
 pub mod newton;
+pub mod ordering;
 pub mod output;
 pub mod results;
 pub mod rigid;

@@ -1,23 +1,38 @@
 //! Sparse direct solution of the Newton systems with faer.
 //!
 //! Symmetric systems are factored with a supernodal/simplicial Cholesky
-//! `K = L Lᵀ` (lower triangle read); when that fails (not positive
+//! `K = L Lᵀ` (lower triangle read), with a caller-supplied fill-reducing
+//! ordering (nested dissection, [`crate::ordering`]) or faer's AMD; when that fails (not positive
 //! definite, e.g. past a limit point) or the system is unsymmetric, a sparse
 //! LU with partial pivoting is used. The symbolic analysis (fill-reducing
 //! ordering, elimination tree) is kept and reused while the pattern is
 //! unchanged. A failed LU, or a non-finite solution, is reported as a
 //! singular system.
 
-use faer::Side;
+use std::sync::Arc;
+
+use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::solvers::Solve;
+use faer::perm::PermRef;
 use faer::sparse::SparseColMatRef;
-use faer::sparse::linalg::solvers::{Llt, Lu, SymbolicLlt, SymbolicLu};
+use faer::sparse::linalg::cholesky::{
+    LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
+};
+use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
+use faer::{Conj, Side};
+
+/// Numeric Cholesky factor with its (shared) symbolic structure.
+#[derive(Debug)]
+pub struct Cholesky {
+    symbolic: Arc<SymbolicCholesky<usize>>,
+    values: Vec<f64>,
+}
 
 /// A factorization ready to solve.
 #[derive(Debug)]
 pub enum Factor {
     /// Cholesky.
-    Llt(Llt<usize, f64>),
+    Llt(Cholesky),
     /// LU with partial pivoting.
     Lu(Box<Lu<usize, f64>>),
 }
@@ -28,7 +43,16 @@ impl Factor {
     pub fn solve(&self, b: &[f64]) -> Vec<f64> {
         let mut rhs = faer::Mat::<f64>::from_fn(b.len(), 1, |i, _| b[i]);
         match self {
-            Self::Llt(f) => f.solve_in_place(rhs.as_mut()),
+            Self::Llt(f) => {
+                let par = faer::get_global_parallelism();
+                let mut mem = MemBuffer::new(f.symbolic.solve_in_place_scratch::<f64>(1, par));
+                LltRef::new(&f.symbolic, &f.values).solve_in_place_with_conj(
+                    Conj::No,
+                    rhs.as_mut(),
+                    par,
+                    MemStack::new(&mut mem),
+                );
+            }
             Self::Lu(f) => f.solve_in_place(rhs.as_mut()),
         }
         (0..b.len()).map(|i| rhs[(i, 0)]).collect()
@@ -51,8 +75,10 @@ pub struct Singular(pub String);
 /// Factorizer with cached symbolic analyses.
 #[derive(Debug, Default)]
 pub struct LinearSolver {
-    llt: Option<SymbolicLlt<usize>>,
+    llt: Option<Arc<SymbolicCholesky<usize>>>,
     lu: Option<SymbolicLu<usize>>,
+    /// Fill-reducing order `new → old` (AMD when `None`).
+    order: Option<(Vec<usize>, Vec<usize>)>,
 }
 
 impl LinearSolver {
@@ -60,6 +86,22 @@ impl LinearSolver {
     #[must_use]
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// Uses the equation order `perm` (`new → old`) for Cholesky.
+    ///
+    /// # Panics
+    /// If `perm` is not a permutation.
+    #[must_use]
+    pub fn with_order(mut self, perm: Vec<usize>) -> Self {
+        let mut inv = vec![usize::MAX; perm.len()];
+        for (new, &old) in perm.iter().enumerate() {
+            inv[old] = new;
+        }
+        assert!(inv.iter().all(|&i| i != usize::MAX), "not a permutation");
+        self.order = Some((perm, inv));
+        self.llt = None;
+        self
     }
 
     /// Forgets the symbolic analyses (call when the pattern changes).
@@ -74,10 +116,16 @@ impl LinearSolver {
     /// Allocation failure.
     pub fn analyze(&mut self, a: SparseColMatRef<'_, usize, f64>) -> Result<(), Singular> {
         if self.llt.is_none() {
-            self.llt = Some(
-                SymbolicLlt::try_new(a.symbolic(), Side::Lower)
-                    .map_err(|e| Singular(format!("{e:?}")))?,
-            );
+            let ord = match &self.order {
+                Some((fwd, inv)) if fwd.len() == a.nrows() => {
+                    SymmetricOrdering::Custom(PermRef::new_checked(fwd, inv, fwd.len()))
+                }
+                _ => SymmetricOrdering::Amd,
+            };
+            let sym =
+                factorize_symbolic_cholesky(a.symbolic(), Side::Lower, ord, Default::default())
+                    .map_err(|e| Singular(format!("{e:?}")))?;
+            self.llt = Some(Arc::new(sym));
         }
         Ok(())
     }
@@ -93,9 +141,24 @@ impl LinearSolver {
     ) -> Result<Factor, Singular> {
         if symmetric {
             self.analyze(a)?;
-            let sym = self.llt.clone().expect("analysed");
-            if let Ok(f) = Llt::try_new_with_symbolic(sym, a, Side::Lower) {
-                return Ok(Factor::Llt(f));
+            let symbolic = self.llt.clone().expect("analysed");
+            let par = faer::get_global_parallelism();
+            let mut values = vec![0.0; symbolic.len_val()];
+            let req = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
+            let mut mem = MemBuffer::try_new(req).map_err(|_| Singular("out of memory".into()))?;
+            let ok = symbolic
+                .factorize_numeric_llt::<f64>(
+                    &mut values,
+                    a,
+                    Side::Lower,
+                    Default::default(),
+                    par,
+                    MemStack::new(&mut mem),
+                    Default::default(),
+                )
+                .is_ok();
+            if ok {
+                return Ok(Factor::Llt(Cholesky { symbolic, values }));
             }
         }
         if self.lu.is_none() {
