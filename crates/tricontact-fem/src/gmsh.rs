@@ -107,7 +107,16 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<Mesh> {
         )));
     }
     let names = parse_physical_names(bytes, path)?;
-    let msh = mshio::parse_msh_bytes(bytes).map_err(|e| merr(format!("parse error: {e}")))?;
+    let msh = mshio::parse_msh_bytes(bytes).map_err(|e| {
+        // mshio's message spans several lines and ends with a hex dump: keep
+        // the context chain on one line.
+        let text = e.to_string();
+        let text = text.split("Hex dump").next().unwrap_or_default();
+        merr(format!(
+            "parse error: {}",
+            text.split_whitespace().collect::<Vec<_>>().join(" ")
+        ))
+    })?;
 
     // Entity (dim, tag) -> physical tags.
     let mut entity_phys: HashMap<(i32, i32), Vec<i32>> = HashMap::new();

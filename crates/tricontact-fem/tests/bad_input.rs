@@ -181,3 +181,16 @@ fn several_problems_are_all_listed() {
         "{msg}"
     );
 }
+
+#[test]
+fn old_msh_format_and_garbage_are_rejected_clearly() {
+    let old = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n";
+    let e = gmsh::parse_msh(old.as_bytes(), Path::new("old.msh")).expect_err("2.2");
+    assert!(e.to_string().contains("4.1"), "{e}");
+    let e = gmsh::parse_msh(b"hello", Path::new("x.msh")).expect_err("garbage");
+    assert!(e.to_string().contains("not a Gmsh mesh"), "{e}");
+    let truncated = &msh(4, &TET)[..200];
+    let e = gmsh::parse_msh(truncated.as_bytes(), Path::new("t.msh")).expect_err("truncated");
+    assert!(matches!(e, FemError::Mesh { .. }), "{e}");
+    assert!(!e.to_string().contains('\n'), "one line: {e}");
+}
