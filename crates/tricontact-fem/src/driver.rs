@@ -5,7 +5,8 @@
 //! active there, else 0) to 1 (active in `s`) or 0 (inactive). A
 //! constrained DOF goes linearly from its displacement at the start of the
 //! step to its target (0 for `fix`), reached at `t = 1`. DOFs of inactive
-//! boundaries are free.
+//! boundaries are free; the reaction a DOF carried when it is released is
+//! applied as a force ramped from full to zero over the step.
 //!
 //! Increment control: start with `Δt = 1/increments`; on a [`Failure`] the
 //! state is restored to the last converged increment and `Δt` is halved (at
@@ -180,6 +181,8 @@ pub fn run(
     let n_dofs = an.num_nodal_dofs() + extra.num_extra();
     let mut u = vec![0.0; n_dofs];
     let mut summary = RunSummary::default();
+    let mut prev_mask: Vec<bool> = Vec::new();
+    let mut last_reactions = vec![0.0; n_dofs];
     for (s, step) in an.steps.iter().enumerate() {
         let (mask, targets) = step_constraints(an, s);
         if extra.num_extra() == 0 {
@@ -192,12 +195,20 @@ pub fn run(
         let mut solver = LinearSolver::new().with_order(equation_order(&an.mesh.nodes, &adj, &dm));
         drop(adj);
         let u_step = u.clone();
+        // Reactions of DOFs released at this step are ramped down to zero.
+        let released: Vec<(usize, f64)> = (0..an.num_nodal_dofs())
+            .filter(|&d| prev_mask.get(d).copied().unwrap_or(false) && !mask[d])
+            .map(|d| (d, last_reactions[d]))
+            .collect();
         let mut control = IncrementControl::new(step.increments, step.max_cutbacks);
         let mut t = 0.0;
         let mut increment = 0;
         while t < 1.0 - 1e-12 {
             let t_new = control.target(t);
-            let fext = external_forces(an, n_dofs, s, t_new);
+            let mut fext = external_forces(an, n_dofs, s, t_new);
+            for &(d, r) in &released {
+                fext[d] += (1.0 - t_new) * r;
+            }
             let prescribed: Vec<(usize, f64)> = targets
                 .iter()
                 .map(|&(dof, v)| (dof, u_step[dof] + t_new * (v - u_step[dof])))
@@ -222,6 +233,7 @@ pub fn run(
                     for &(dof, _) in &targets {
                         reactions[dof] = c.residual[dof];
                     }
+                    last_reactions.clone_from(&reactions);
                     observer(&IncrementInfo {
                         step: s,
                         step_name: &step.name,
@@ -254,6 +266,7 @@ pub fn run(
                 }
             }
         }
+        prev_mask = mask;
     }
     summary.u = u;
     Ok(summary)
