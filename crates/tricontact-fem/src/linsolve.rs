@@ -58,6 +58,19 @@ impl Factor {
         (0..b.len()).map(|i| rhs[(i, 0)]).collect()
     }
 
+    /// Stored entries of the Cholesky factor (0 for LU) and whether it is
+    /// supernodal.
+    #[must_use]
+    pub fn factor_size(&self) -> (usize, bool) {
+        match self {
+            Self::Llt(f) => (
+                f.values.len(),
+                matches!(f.symbolic.raw(), faer::sparse::linalg::cholesky::SymbolicCholeskyRaw::Supernodal(_)),
+            ),
+            Self::Lu(_) => (0, false),
+        }
+    }
+
     /// `"cholesky"` or `"lu"`.
     #[must_use]
     pub fn method(&self) -> &'static str {
