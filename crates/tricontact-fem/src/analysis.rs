@@ -48,6 +48,9 @@ pub struct Load {
     pub name: String,
     /// `(node, force)` pairs, sorted by node.
     pub forces: Vec<(usize, [f64; 3])>,
+    /// Follower pressure `(p, oriented faces)`: in `nlgeom` steps it acts on
+    /// the deformed surface instead of `forces`.
+    pub follower: Option<(f64, Vec<(usize, f64)>)>,
     /// Active flag per step.
     pub active: Vec<bool>,
 }
@@ -422,6 +425,13 @@ impl Analysis {
                 problems.push(unknown(kind, &l.group, &mesh));
                 continue;
             };
+            let mut follower = None;
+            if l.follower && l.pressure.is_none() {
+                problems.push(invalid(format!(
+                    "load '{}': `follower` applies to a pressure only",
+                    l.group
+                )));
+            }
             let forces = match (l.force, l.pressure) {
                 (Some(f), None) => {
                     let faces: Vec<usize> = if g.dim == 2 {
@@ -451,8 +461,14 @@ impl Analysis {
                         )));
                         continue;
                     }
-                    match loads::pressure_forces(&mesh, &g.elements, p, &body_refs, &node_elems) {
-                        Ok(f) => f,
+                    match loads::outward_faces(&mesh, &g.elements, &body_refs, &node_elems) {
+                        Ok(faces) => {
+                            let f = loads::pressure_forces(&mesh, &faces, p);
+                            if l.follower {
+                                follower = Some((p, faces));
+                            }
+                            f
+                        }
                         Err(tag) => {
                             problems.push(invalid(format!(
                                 "load '{}': face {tag} is not on the surface of a body",
@@ -481,6 +497,7 @@ impl Analysis {
             load_list.push(Load {
                 name: l.group.clone(),
                 forces,
+                follower,
                 active,
             });
         }

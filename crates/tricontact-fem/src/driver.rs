@@ -14,7 +14,7 @@
 //! row `Δt` doubles back, up to its initial value. State (`u`) is committed
 //! only at converged increments.
 
-use crate::analysis::Analysis;
+use crate::analysis::{Analysis, Load};
 use crate::assembly::{DofMap, ExtraTerms, Pattern, node_adjacency};
 use crate::error::{FemError, Result};
 use crate::linsolve::LinearSolver;
@@ -149,14 +149,41 @@ pub fn step_constraints(an: &Analysis, s: usize) -> (Vec<bool>, Vec<(usize, f64)
     (mask, targets)
 }
 
-/// External force vector (global DOFs) in step `s` at load factor `t`.
+/// Amplitude of load `l` in step `s` at load factor `t` (see module doc).
+#[must_use]
+pub fn amplitude(l: &Load, s: usize, t: f64) -> f64 {
+    let prev = if s > 0 && l.active[s - 1] { 1.0 } else { 0.0 };
+    let target = if l.active[s] { 1.0 } else { 0.0 };
+    prev + t * (target - prev)
+}
+
+/// Follower pressures acting in step `s` at `t`: `(load index, p × amplitude)`.
+#[must_use]
+pub fn follower_pressures(an: &Analysis, s: usize, t: f64) -> Vec<(usize, f64)> {
+    if !an.steps[s].nlgeom {
+        return Vec::new();
+    }
+    an.loads
+        .iter()
+        .enumerate()
+        .filter_map(|(i, l)| {
+            let (p, _) = l.follower.as_ref()?;
+            let amp = amplitude(l, s, t);
+            (amp != 0.0).then_some((i, p * amp))
+        })
+        .collect()
+}
+
+/// External dead-load vector (global DOFs) in step `s` at load factor `t`
+/// (follower pressures of `nlgeom` steps excluded: see [`follower_pressures`]).
 #[must_use]
 pub fn external_forces(an: &Analysis, n_dofs: usize, s: usize, t: f64) -> Vec<f64> {
     let mut f = vec![0.0; n_dofs];
     for l in &an.loads {
-        let prev = if s > 0 && l.active[s - 1] { 1.0 } else { 0.0 };
-        let target = if l.active[s] { 1.0 } else { 0.0 };
-        let amp = prev + t * (target - prev);
+        if l.follower.is_some() && an.steps[s].nlgeom {
+            continue;
+        }
+        let amp = amplitude(l, s, t);
         if amp == 0.0 {
             continue;
         }
@@ -213,6 +240,7 @@ pub fn run(
                 .iter()
                 .map(|&(dof, v)| (dof, u_step[dof] + t_new * (v - u_step[dof])))
                 .collect();
+            let follower = follower_pressures(an, s, t_new);
             let problem = IncrementProblem {
                 an,
                 dm: &dm,
@@ -221,6 +249,7 @@ pub fn run(
                 step,
                 fext: &fext,
                 prescribed: &prescribed,
+                follower: &follower,
             };
             match solve_increment(&problem, &u, &mut solver) {
                 Ok(c) => {

@@ -17,6 +17,7 @@ pub mod driver;
 pub mod element;
 pub mod error;
 pub mod face;
+pub mod follower;
 pub mod gmsh;
 pub mod hex8;
 pub mod linear_elastic;

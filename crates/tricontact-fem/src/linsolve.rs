@@ -65,7 +65,10 @@ impl Factor {
         match self {
             Self::Llt(f) => (
                 f.values.len(),
-                matches!(f.symbolic.raw(), faer::sparse::linalg::cholesky::SymbolicCholeskyRaw::Supernodal(_)),
+                matches!(
+                    f.symbolic.raw(),
+                    faer::sparse::linalg::cholesky::SymbolicCholeskyRaw::Supernodal(_)
+                ),
             ),
             Self::Lu(_) => (0, false),
         }

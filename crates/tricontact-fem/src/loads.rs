@@ -1,5 +1,6 @@
 //! Consistent nodal forces of the model loads (dead loads: computed once in
-//! the reference configuration and scaled by the load amplitude).
+//! the reference configuration and scaled by the load amplitude; follower
+//! pressures are in [`crate::follower`]).
 //!
 //! Pressure `p` on a face: `f_a = −p ∫ N_a n dA`, with `n` the unit normal
 //! pointing out of the adjacent body element, so a positive pressure pushes
@@ -59,36 +60,46 @@ fn centroid(mesh: &Mesh, nodes: &[usize]) -> [f64; 3] {
     c
 }
 
-/// Nodal forces of pressure `p` on `faces`; `Err(tag)` for a face that is
-/// not on the boundary of a body element.
+/// Outward sign of each face's area vector `∂X/∂ξ × ∂X/∂η` relative to
+/// the body element it bounds: `(face element, ±1)`.
 ///
 /// # Errors
 /// The Gmsh tag of the first face without an adjacent body element.
-pub fn pressure_forces(
+pub fn outward_faces(
     mesh: &Mesh,
     faces: &[usize],
-    p: f64,
     body: &[&Element],
     node_elems: &[Vec<usize>],
-) -> Result<HashMap<usize, [f64; 3]>, u64> {
+) -> Result<Vec<(usize, f64)>, u64> {
+    faces
+        .iter()
+        .map(|&fi| {
+            let face = &mesh.elements[fi];
+            let corners = &face.nodes[..face.kind.num_corners()];
+            let owner = node_elems[corners[0]]
+                .iter()
+                .copied()
+                .find(|&e| corners.iter().all(|c| body[e].nodes.contains(c)))
+                .ok_or(face.tag)?;
+            let ec = centroid(mesh, &body[owner].nodes);
+            let fc = centroid(mesh, corners);
+            let a_sum: [f64; 3] = face_points(mesh, face).iter().fold([0.0; 3], |s, (a, _)| {
+                [s[0] + a[0], s[1] + a[1], s[2] + a[2]]
+            });
+            let outward = (0..3).map(|i| a_sum[i] * (fc[i] - ec[i])).sum::<f64>();
+            Ok((fi, if outward < 0.0 { -1.0 } else { 1.0 }))
+        })
+        .collect()
+}
+
+/// Nodal forces of a dead pressure `p` on oriented `faces` (see
+/// [`outward_faces`]).
+#[must_use]
+pub fn pressure_forces(mesh: &Mesh, faces: &[(usize, f64)], p: f64) -> HashMap<usize, [f64; 3]> {
     let mut out: HashMap<usize, [f64; 3]> = HashMap::new();
-    for &fi in faces {
+    for &(fi, sign) in faces {
         let face = &mesh.elements[fi];
-        let corners = &face.nodes[..face.kind.num_corners()];
-        let owner = node_elems[corners[0]]
-            .iter()
-            .copied()
-            .find(|&e| corners.iter().all(|c| body[e].nodes.contains(c)))
-            .ok_or(face.tag)?;
-        let ec = centroid(mesh, &body[owner].nodes);
-        let fc = centroid(mesh, corners);
-        let pts = face_points(mesh, face);
-        let a_sum: [f64; 3] = pts.iter().fold([0.0; 3], |s, (a, _)| {
-            [s[0] + a[0], s[1] + a[1], s[2] + a[2]]
-        });
-        let outward = (0..3).map(|i| a_sum[i] * (fc[i] - ec[i])).sum::<f64>();
-        let sign = if outward < 0.0 { -1.0 } else { 1.0 };
-        for (a, n) in &pts {
+        for (a, n) in face_points(mesh, face) {
             for (k, &node) in face.nodes.iter().enumerate() {
                 let f = out.entry(node).or_insert([0.0; 3]);
                 for i in 0..3 {
@@ -97,7 +108,7 @@ pub fn pressure_forces(
             }
         }
     }
-    Ok(out)
+    out
 }
 
 /// Nodal forces of a total force `force` spread over a group: area-weighted

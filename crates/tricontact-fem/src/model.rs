@@ -145,6 +145,9 @@ pub struct LoadDef {
     pub force: Option<[f64; 3]>,
     /// Pressure (positive pushes into the body), dead load on the reference surface.
     pub pressure: Option<f64>,
+    /// Pressure follows the deformed surface in `nlgeom` steps.
+    #[serde(default)]
+    pub follower: bool,
     /// Names of the steps in which it is active (default: all).
     pub steps: Option<Vec<String>>,
 }

@@ -19,6 +19,7 @@
 
 use crate::analysis::{Analysis, Step};
 use crate::assembly::{DofMap, ExtraTerms, NO_EQ, Pattern, assemble};
+use crate::follower;
 use crate::linsolve::LinearSolver;
 
 /// A converged increment.
@@ -79,6 +80,8 @@ pub struct IncrementProblem<'a> {
     pub fext: &'a [f64],
     /// Prescribed DOFs and their values at the increment's end.
     pub prescribed: &'a [(usize, f64)],
+    /// Follower pressures `(load index, pressure)` at the increment's end.
+    pub follower: &'a [(usize, f64)],
 }
 
 /// Solves one increment starting from the committed `u0`.
@@ -92,7 +95,7 @@ pub fn solve_increment(
 ) -> Result<Converged, Failure> {
     let (an, dm) = (p.an, p.dm);
     let nlgeom = p.step.nlgeom;
-    let symmetric = p.extra.symmetric();
+    let symmetric = p.extra.symmetric() && p.follower.is_empty();
     let reuse = p.extra.num_extra() == 0;
     let mut u = u0.to_vec();
     let mut dup = vec![0.0; u.len()];
@@ -124,6 +127,28 @@ pub fn solve_increment(
             p.extra,
         )
         .map_err(|e| inverted(e.0))?;
+        let mut asm = asm;
+        if !p.follower.is_empty() {
+            let mut trip = Vec::new();
+            for &(li, pressure) in p.follower {
+                if let Some((_, faces)) = &an.loads[li].follower {
+                    follower::pressure_terms(
+                        &an.mesh,
+                        faces,
+                        pressure,
+                        &u,
+                        &mut asm.residual,
+                        Some(&mut trip),
+                    );
+                }
+            }
+            for (r, c, v) in trip {
+                let (er, ec) = (dm.eq[r], dm.eq[c]);
+                if er != NO_EQ && ec != NO_EQ {
+                    asm.extra.push(faer::sparse::Triplet::new(er, ec, v));
+                }
+            }
+        }
         let mut r = asm.residual.clone();
         for (ri, fi) in r.iter_mut().zip(p.fext) {
             *ri -= fi;

@@ -123,3 +123,55 @@ fn simple_shear_gamma_one_and_a_half() {
         }
     }
 }
+
+/// Hydrostatic compression by a follower pressure `p` on the three outer
+/// faces of a cube with symmetry supports: `b = l² I`, `J = l³`, and the
+/// Cauchy stress `(μ (l² − 1) + 3 λ ln l) / l³ = −p`. A dead pressure (the
+/// same nominal load on the reference faces) gives a different stretch.
+#[test]
+fn hydrostatic_follower_pressure() {
+    let p = 3.0;
+    let mat = Material::from_e_nu(Law::NeoHooke, E, NU);
+    let (lam, mu) = (mat.lambda, mat.mu);
+    let mut l: f64 = 1.0;
+    for _ in 0..60 {
+        let g = (mu * (l * l - 1.0) + 3.0 * lam * l.ln()) / l.powi(3) + p;
+        let dg = (2.0 * mu * l + 3.0 * lam / l) / l.powi(3)
+            - 3.0 * (mu * (l * l - 1.0) + 3.0 * lam * l.ln()) / l.powi(4);
+        l -= g / dg;
+    }
+    let run_with = |follower: bool| {
+        let mesh = box_mesh([1.0, 1.0, 1.0], [2, 2, 2], ElementKind::Hex8);
+        let mut text = material_text();
+        for (g, c) in [("xmin", "x"), ("ymin", "y"), ("zmin", "z")] {
+            text += &format!("[[boundary]]\ngroup = \"{g}\"\nfix = [\"{c}\"]\n");
+        }
+        for g in ["xmax", "ymax", "zmax"] {
+            text += &format!("[[load]]\ngroup = \"{g}\"\npressure = {p}\nfollower = {follower}\n");
+        }
+        text += "[[step]]\nnlgeom = true\nincrements = 4\nresidual_tolerance = 1e-12\ndisplacement_tolerance = 1e-12\n";
+        let an = common::analysis(mesh, &text);
+        let (_, rec) = common::solve(&an);
+        let u = rec.last().expect("converged").u.clone();
+        let corner = an
+            .mesh
+            .nodes
+            .iter()
+            .position(|q| q.iter().all(|&c| (c - 1.0).abs() < 1e-12))
+            .expect("corner");
+        let f = stress_fields(&an, &u, true);
+        (u[3 * corner], f.cell_stress)
+    };
+    let (uc, stress) = run_with(true);
+    assert!((uc - (l - 1.0)).abs() <= 1e-9, "corner {uc} vs {}", l - 1.0);
+    for cell in stress.chunks(6) {
+        for c in 0..3 {
+            assert!((cell[c] + p).abs() <= 1e-9 * p, "σ = {cell:?}");
+        }
+    }
+    let (uc_dead, _) = run_with(false);
+    assert!(
+        (uc_dead - uc).abs() > 1e-2,
+        "dead and follower loads should differ at this strain"
+    );
+}

@@ -136,6 +136,13 @@ fn main() {
     );
     println!("solve:              {:>8.3} s", t_solve.as_secs_f64());
     let (nnz_l, supernodal) = factor.factor_size();
-    println!("factor entries:     {nnz_l} ({})", if supernodal { "supernodal" } else { "simplicial" });
+    println!(
+        "factor entries:     {nnz_l} ({})",
+        if supernodal {
+            "supernodal"
+        } else {
+            "simplicial"
+        }
+    );
     println!("relative residual:  {res:.2e}");
 }
