@@ -90,3 +90,18 @@ fn every_vtu_and_history_switches() {
     let _ = std::fs::remove_dir_all(&dir);
     let _ = std::fs::remove_dir_all(&dir2);
 }
+
+#[test]
+fn fully_prescribed_model_needs_no_solve() {
+    let mesh = box_mesh([1.0, 1.0, 1.0], [1, 1, 1], ElementKind::Hex8);
+    let all: Vec<usize> = (0..mesh.nodes.len()).collect();
+    let mut an = common::analysis(
+        mesh,
+        "[[material]]\nname = \"m\"\ntype = \"neo_hooke\"\nE = 1.0\nnu = 0.3\n[[body]]\ngroup = \"solid\"\nmaterial = \"m\"\n[[step]]\nnlgeom = true\nincrements = 2\n",
+    );
+    common::prescribe_field(&mut an, &all, |x| [0.5 * x[1], 0.0, 0.0]);
+    let (summary, rec) = common::solve(&an);
+    assert_eq!(summary.increments, 2);
+    let total: f64 = rec.last().expect("converged").reactions.iter().map(|r| r[0]).sum();
+    assert!(total.abs() < 1e-12, "reactions of a free-standing shear balance: {total}");
+}
