@@ -50,8 +50,18 @@ impl ResultWriter {
         let mut history = String::from(
             "step,step_name,increment,load_factor,time,iterations,residual,relative_residual",
         );
-        for b in &an.boundaries {
-            let _ = write!(history, ",{0}_Rx,{0}_Ry,{0}_Rz", b.name);
+        for (i, b) in an.boundaries.iter().enumerate() {
+            // Two boundaries on one group get distinct columns: `name`, `name#2`, …
+            let same = an.boundaries[..i]
+                .iter()
+                .filter(|o| o.name == b.name)
+                .count();
+            let name = if same == 0 {
+                b.name.clone()
+            } else {
+                format!("{}#{}", b.name, same + 1)
+            };
+            let _ = write!(history, ",{0}_Rx,{0}_Ry,{0}_Rz", name);
         }
         history.push('\n');
         Ok(Self {

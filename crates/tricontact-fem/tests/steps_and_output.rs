@@ -102,6 +102,15 @@ fn fully_prescribed_model_needs_no_solve() {
     common::prescribe_field(&mut an, &all, |x| [0.5 * x[1], 0.0, 0.0]);
     let (summary, rec) = common::solve(&an);
     assert_eq!(summary.increments, 2);
-    let total: f64 = rec.last().expect("converged").reactions.iter().map(|r| r[0]).sum();
-    assert!(total.abs() < 1e-12, "reactions of a free-standing shear balance: {total}");
+    let total: f64 = rec
+        .last()
+        .expect("converged")
+        .reactions
+        .iter()
+        .map(|r| r[0])
+        .sum();
+    assert!(
+        total.abs() < 1e-12,
+        "reactions of a free-standing shear balance: {total}"
+    );
 }
