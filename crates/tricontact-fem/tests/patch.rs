@@ -112,3 +112,32 @@ fn finite_strain_patch_all_elements() {
         run_patch(kind, "linear_elastic", true, 20.0);
     }
 }
+
+/// The same patch test on the unstructured Gmsh tet10 mesh of a 2 × 1 × 1
+/// block (`tests/data/block_tet10.msh`), at finite strain.
+#[test]
+fn gmsh_tet10_mesh_patch() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/block_tet10.msh");
+    let mesh = tricontact_fem::gmsh::read_msh(&path).expect("mesh");
+    let size = [2.0, 1.0, 1.0];
+    let boundary = common::box_boundary_nodes(&mesh, size);
+    let mut an = common::analysis(
+        mesh,
+        "[[material]]\nname = \"m\"\ntype = \"neo_hooke\"\nE = 10.0\nnu = 0.4\n[[body]]\ngroup = \"block\"\nmaterial = \"m\"\n[[step]]\nnlgeom = true\nincrements = 2\nresidual_tolerance = 1e-12\ndisplacement_tolerance = 1e-12\n",
+    );
+    let a = A.map(|r| r.map(|v| v * 30.0));
+    let field = move |x: [f64; 3]| -> [f64; 3] {
+        std::array::from_fn(|i| B[i] + (0..3).map(|j| a[i][j] * x[j]).sum::<f64>())
+    };
+    common::prescribe_field(&mut an, &boundary, field);
+    let (_, rec) = common::solve(&an);
+    let u = &rec.last().expect("converged").u;
+    let interior = an.mesh.nodes.len() - boundary.len();
+    assert!(interior > 10, "the mesh has interior nodes");
+    for (p, x) in an.mesh.nodes.iter().enumerate() {
+        let exact = field(*x);
+        for i in 0..3 {
+            assert!((u[3 * p + i] - exact[i]).abs() <= 1e-10, "node {p}");
+        }
+    }
+}
