@@ -95,6 +95,8 @@ pub struct LinearSolver {
     lu: Option<SymbolicLu<usize>>,
     /// Fill-reducing order `new → old` (AMD when `None`).
     order: Option<(Vec<usize>, Vec<usize>)>,
+    /// A factorization kept for reuse while the tangent is constant.
+    pub cached: Option<Factor>,
 }
 
 impl LinearSolver {
@@ -124,6 +126,7 @@ impl LinearSolver {
     pub fn reset(&mut self) {
         self.llt = None;
         self.lu = None;
+        self.cached = None;
     }
 
     /// Symbolic Cholesky analysis only (for timing).

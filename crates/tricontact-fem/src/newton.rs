@@ -3,7 +3,9 @@
 //! Unknowns: free DOFs (and extra unknowns); prescribed DOFs move from their
 //! committed values to the increment's targets `u_p`. Iteration 0 is the
 //! linearised predictor `K_ff Δu_f = −(r_f + K_fp Δu_p)` assembled at the
-//! committed state; then `K_ff δu = −r_f(u)` until convergence.
+//! committed state; then `K_ff δu = −r_f(u)` until convergence. In
+//! small-strain steps (constant tangent) the factorization is computed once
+//! per step and reused by every iteration and increment.
 //!
 //! Convergence (both must hold), with `r_ref = max(‖r⁰‖, ‖f_ext,f‖, ‖R‖)`
 //! (`R` the reactions) and `Δu = u − u_committed`:
@@ -115,15 +117,26 @@ pub fn solve_increment(
     let mut method = "none";
     let mut iterations = 0usize;
     let mut predictor = true;
+    // Small strain without extra or follower terms: the tangent is constant,
+    // so the prescribed values are applied directly (the residual then
+    // contains `K_fp Δu_p` exactly) and one factorization serves the step.
+    let constant_tangent = !nlgeom && p.extra.num_extra() == 0 && p.follower.is_empty();
+    if constant_tangent {
+        for &(dof, v) in p.prescribed {
+            u[dof] = v;
+        }
+        dup.fill(0.0);
+    }
     loop {
+        let need_tangent = !(constant_tangent && solver.cached.is_some());
         let asm = assemble(
             an,
             dm,
             p.pat,
             &u,
             nlgeom,
-            true,
-            predictor.then_some(dup.as_slice()),
+            need_tangent,
+            (predictor && !constant_tangent).then_some(dup.as_slice()),
             p.extra,
         )
         .map_err(|e| inverted(e.0))?;
@@ -218,12 +231,19 @@ pub fn solve_increment(
         if !reuse {
             solver.reset();
         }
-        let k = asm.matrix(p.pat);
-        let factor = solver
-            .factor(k.as_ref(), symmetric)
-            .map_err(|s| Failure::Singular(s.0))?;
+        if need_tangent {
+            let k = asm.matrix(p.pat);
+            let factor = solver
+                .factor(k.as_ref(), symmetric)
+                .map_err(|s| Failure::Singular(s.0))?;
+            solver.cached = Some(factor);
+        }
+        let factor = solver.cached.as_ref().expect("factored above");
         method = factor.method();
         let du = factor.solve(&rhs);
+        if !constant_tangent {
+            solver.cached = None;
+        }
         if du.iter().any(|v| !v.is_finite()) {
             return Err(Failure::Singular("non-finite solution".into()));
         }
