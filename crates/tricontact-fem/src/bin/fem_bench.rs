@@ -5,7 +5,8 @@
 //!
 //! `cargo run --release -p tricontact-fem --bin fem-bench [-- N [--amd]]`
 //! uses `N × N × N` bricks (default 45: 97 336 nodes, ≈ 290 000 free DOFs);
-//! `--amd` replaces the nested-dissection ordering by faer's AMD.
+//! `--amd` replaces the nested-dissection ordering by faer's AMD;
+//! `--dense M` only times a dense `M × M` Cholesky (machine reference).
 
 use std::time::Instant;
 
@@ -18,7 +19,36 @@ use tricontact_fem::model::Model;
 use tricontact_fem::ordering::equation_order;
 use tricontact_fem::structured::box_mesh;
 
+/// Dense Cholesky of an `m × m` SPD matrix: the machine's dense GFlop/s,
+/// an upper bound for the supernodal sparse factorization.
+fn dense_reference(m: usize) {
+    let a = faer::Mat::<f64>::from_fn(m, m, |i, j| {
+        if i == j {
+            m as f64
+        } else {
+            1.0 / (1.0 + (i + j) as f64)
+        }
+    });
+    let t = Instant::now();
+    let f = a.llt(faer::Side::Lower);
+    let secs = t.elapsed().as_secs_f64();
+    let ok = f.is_ok();
+    println!(
+        "dense Cholesky {m}x{m}: {secs:.3} s = {:.1} GFlop/s ({})",
+        (m as f64).powi(3) / 3.0 / secs / 1e9,
+        if ok { "ok" } else { "failed" }
+    );
+}
+
 fn main() {
+    if let Some(m) = std::env::args()
+        .skip_while(|a| a != "--dense")
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+    {
+        dense_reference(m);
+        return;
+    }
     let n: usize = std::env::args()
         .nth(1)
         .and_then(|s| s.parse().ok())
