@@ -40,6 +40,9 @@ enum Command {
         /// Print a one-line summary per increment.
         #[arg(long)]
         verbose: bool,
+        /// Worker threads for assembly and factorization (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
     },
     /// Parse and validate a model, print a summary and every problem.
     Check {
@@ -55,8 +58,10 @@ fn main() -> ExitCode {
             model,
             output,
             verbose,
-        } => run(&model, output, verbose),
-        Command::Check { model } => check(&model),
+            threads,
+        } => set_threads(threads)
+            .and_then(|()| run(&model, output, verbose).map_err(|e| e.to_string())),
+        Command::Check { model } => check(&model).map_err(|e| e.to_string()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -65,6 +70,17 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+fn set_threads(threads: Option<usize>) -> Result<(), String> {
+    let Some(n) = threads else { return Ok(()) };
+    if n == 0 {
+        return Err("--threads must be at least 1".into());
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build_global()
+        .map_err(|e| format!("cannot start {n} threads: {e}"))
 }
 
 fn increment_line(info: &IncrementInfo<'_>) -> String {
