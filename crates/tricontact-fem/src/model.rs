@@ -67,10 +67,11 @@ pub struct MaterialDef {
     /// Law.
     #[serde(rename = "type")]
     pub kind: MaterialKind,
-    /// Young's modulus.
-    #[serde(rename = "E")]
+    /// Young's modulus (`E`, alias `youngs_modulus`).
+    #[serde(rename = "E", alias = "youngs_modulus")]
     pub e: f64,
-    /// Poisson's ratio.
+    /// Poisson's ratio (`nu`, alias `poisson_ratio`).
+    #[serde(alias = "poisson_ratio")]
     pub nu: f64,
 }
 
@@ -339,6 +340,15 @@ nlgeom = true
         assert!(m.steps[0].nlgeom);
         assert!(m.output.vtu);
         assert_eq!(m.step_name(0), "step-1");
+    }
+
+    #[test]
+    fn long_material_key_names_are_accepted() {
+        let text = GOOD
+            .replace("E = 210e3", "youngs_modulus = 7e4")
+            .replace("nu = 0.3", "poisson_ratio = 0.33");
+        let m = Model::parse(&text, Path::new("m.toml")).expect("valid");
+        assert_eq!((m.materials[0].e, m.materials[0].nu), (7e4, 0.33));
     }
 
     #[test]
