@@ -9,6 +9,9 @@
 //! * `history.csv`: one row per converged increment: step, name, increment,
 //!   load factor, time, iterations, final residual norm and relative
 //!   residual, then `Rx, Ry, Rz` summed over each boundary group.
+//!
+//! `.vtu` files of an earlier run of the same model in the folder are
+//! removed first, so the folder always matches the `.pvd`.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -19,6 +22,27 @@ use crate::driver::IncrementInfo;
 use crate::error::{FemError, Result};
 use crate::results::{boundary_reactions, stress_fields};
 use crate::vtu::{Field, Grid, pvd_string, vtk_cell, vtu_string};
+
+/// Removes `.vtu` files of an earlier run of the same model
+/// (`<stem>_<3 digits>_<4 digits>.vtu`), so the folder matches the new `.pvd`.
+fn remove_stale(dir: &Path, stem: &str) -> Result<()> {
+    let entries = std::fs::read_dir(dir).map_err(|e| FemError::io(dir, e))?;
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let Some(rest) = name.strip_prefix(stem).and_then(|r| r.strip_prefix('_')) else {
+            continue;
+        };
+        let Some(core) = rest.strip_suffix(".vtu") else {
+            continue;
+        };
+        let parts: Vec<&str> = core.split('_').collect();
+        let numeric = |s: &str, n: usize| s.len() == n && s.bytes().all(|b| b.is_ascii_digit());
+        if parts.len() == 2 && numeric(parts[0], 3) && numeric(parts[1], 4) {
+            std::fs::remove_file(entry.path()).map_err(|e| FemError::io(entry.path(), e))?;
+        }
+    }
+    Ok(())
+}
 
 /// Writes the result files of one run.
 #[derive(Debug)]
@@ -39,6 +63,7 @@ impl ResultWriter {
     /// When the folder cannot be created.
     pub fn new(an: &Analysis, dir: &Path, stem: &str) -> Result<Self> {
         std::fs::create_dir_all(dir).map_err(|e| FemError::io(dir, e))?;
+        remove_stale(dir, stem)?;
         let cells = an
             .body
             .iter()

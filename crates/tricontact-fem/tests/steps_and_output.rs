@@ -65,8 +65,13 @@ fn every_vtu_and_history_switches() {
     );
     let dir = std::env::temp_dir().join(format!("tricontact-every-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("dir");
+    // Left over from an earlier run: removed. Unrelated files: kept.
+    std::fs::write(dir.join("m_001_0007.vtu"), "old").expect("write");
+    std::fs::write(dir.join("notes_001_0007.vtu"), "keep").expect("write");
     let mut w = ResultWriter::new(&an, &dir, "m").expect("writer");
     run(&an, &NoExtra, &mut |info| w.write(&an, info)).expect("run");
+    std::fs::remove_file(dir.join("notes_001_0007.vtu")).expect("unrelated file kept");
     let mut names: Vec<String> = std::fs::read_dir(&dir)
         .expect("dir")
         .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
