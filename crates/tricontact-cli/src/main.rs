@@ -1,6 +1,217 @@
-//! The `tricontact` command-line solver (work in progress).
+//! The `tricontact` command-line solver.
+//!
+//! `tricontact run MODEL [--output DIR] [--verbose]` solves a model and
+//! writes VTU/PVD/history.csv; `tricontact check MODEL` parses and validates
+//! it and prints a summary with every problem found. Exit code 0 on
+//! success; on failure 1 with a one-line cause on stderr.
 
-fn main() {
-    eprintln!("tricontact: the solver front end is not built yet");
-    std::process::exit(2);
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use tricontact_fem::analysis::Analysis;
+use tricontact_fem::assembly::NoExtra;
+use tricontact_fem::driver::{self, IncrementInfo};
+use tricontact_fem::model::Model;
+use tricontact_fem::output::ResultWriter;
+use tricontact_fem::{FemError, gmsh, rigid};
+
+#[derive(Parser)]
+#[command(
+    name = "tricontact",
+    version,
+    about = "Implicit finite-element solver for 3D solids"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Solve a model and write the results.
+    Run {
+        /// Model file (TOML).
+        model: PathBuf,
+        /// Result folder (default: `[output] folder` of the model).
+        #[arg(long)]
+        output: Option<PathBuf>,
+        /// Print a one-line summary per increment.
+        #[arg(long)]
+        verbose: bool,
+        /// Worker threads for assembly and factorization (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+    },
+    /// Parse and validate a model, print a summary and every problem.
+    Check {
+        /// Model file (TOML).
+        model: PathBuf,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Run {
+            model,
+            output,
+            verbose,
+            threads,
+        } => set_threads(threads)
+            .and_then(|()| run(&model, output, verbose).map_err(|e| e.to_string())),
+        Command::Check { model } => check(&model).map_err(|e| e.to_string()),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn set_threads(threads: Option<usize>) -> Result<(), String> {
+    let Some(n) = threads else { return Ok(()) };
+    if n == 0 {
+        return Err("--threads must be at least 1".into());
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build_global()
+        .map_err(|e| format!("cannot start {n} threads: {e}"))
+}
+
+fn increment_line(info: &IncrementInfo<'_>) -> String {
+    let rel: Vec<String> = info
+        .residuals
+        .iter()
+        .map(|r| {
+            format!(
+                "{:.1e}",
+                if info.reference > 0.0 {
+                    r / info.reference
+                } else {
+                    0.0
+                }
+            )
+        })
+        .collect();
+    format!(
+        "step {} '{}' inc {:>3}  t = {:.4}  iters {:>2}  cutbacks {}  {}  rel. residuals [{}]",
+        info.step + 1,
+        info.step_name,
+        info.increment,
+        info.load_factor,
+        info.iterations,
+        info.cutbacks,
+        info.method,
+        rel.join(" ")
+    )
+}
+
+fn run(model_path: &Path, output: Option<PathBuf>, verbose: bool) -> Result<(), FemError> {
+    let model = Model::load(model_path)?;
+    let mesh = gmsh::read_msh(&model.mesh_path())?;
+    let an = Analysis::new(&model, mesh)?;
+    let dir = output.unwrap_or_else(|| model.output_dir());
+    let stem = model_path
+        .file_stem()
+        .map_or_else(|| "model".to_string(), |s| s.to_string_lossy().into_owned());
+    let mut writer = ResultWriter::new(&an, &dir, &stem)?;
+    let total = 1000 * an.steps.len() as u64;
+    let pb = ProgressBar::new(total);
+    pb.set_style(
+        ProgressStyle::with_template("{bar:40} {pos:>5}/{len} {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let summary = driver::run(&an, &NoExtra, &mut |info| {
+        writer.write(&an, info)?;
+        pb.set_position((info.time * 1000.0).round() as u64);
+        pb.set_message(format!("step {} t={:.3}", info.step + 1, info.load_factor));
+        if verbose {
+            if pb.is_hidden() {
+                println!("{}", increment_line(info));
+            } else {
+                pb.println(increment_line(info));
+            }
+        }
+        Ok(())
+    });
+    pb.finish_and_clear();
+    let summary = summary?;
+    println!(
+        "done: {} increments, {} Newton iterations, {} cutbacks; results in {}",
+        summary.increments,
+        summary.iterations,
+        summary.cutbacks,
+        dir.display()
+    );
+    Ok(())
+}
+
+fn check(model_path: &Path) -> Result<(), FemError> {
+    let model = Model::load(model_path)?;
+    let mesh = gmsh::read_msh(&model.mesh_path())?;
+    println!("model: {}", model_path.display());
+    println!("mesh:  {}", model.mesh_path().display());
+    println!("nodes: {}", mesh.nodes.len());
+    for (kind, n) in mesh.count_kinds() {
+        println!("elements {:<6} {n}", kind.name());
+    }
+    println!("groups:");
+    for g in &mesh.groups {
+        println!(
+            "  {:<20} {}D  {:>8} elements {:>8} nodes",
+            g.name,
+            g.dim,
+            g.elements.len(),
+            g.nodes.len()
+        );
+    }
+    let (an, mut problems) = Analysis::build(&model, mesh);
+    let active = an.active_nodes.iter().filter(|&&a| a).count();
+    println!(
+        "bodies: {} elements, {} active nodes, {} DOFs",
+        an.body.len(),
+        active,
+        3 * active
+    );
+    for s in 0..an.steps.len() {
+        let (mask, _) = driver::step_constraints(&an, s);
+        let prescribed = mask.iter().filter(|&&m| m).count();
+        println!(
+            "step {} '{}': {} prescribed DOFs, {} free DOFs, nlgeom = {}",
+            s + 1,
+            an.steps[s].name,
+            prescribed,
+            3 * active - prescribed,
+            an.steps[s].nlgeom
+        );
+        if problems.is_empty()
+            && let Err(m) = rigid::check_supports(&an, &mask)
+        {
+            problems.push(FemError::Singular(format!(
+                "step '{}': {m}",
+                an.steps[s].name
+            )));
+        }
+    }
+    if problems.is_empty() {
+        println!("no problems found");
+        Ok(())
+    } else {
+        println!("{} problem(s):", problems.len());
+        for p in &problems {
+            println!("  - {p}");
+        }
+        if problems.len() == 1 {
+            Err(problems.remove(0))
+        } else {
+            Err(FemError::Invalid(
+                problems.iter().map(ToString::to_string).collect(),
+            ))
+        }
+    }
 }

@@ -1,3 +1,51 @@
-//! Implicit finite-element solver for 3D solids (mesh, elements, materials, assembly, solvers, I/O).
+//! Implicit finite-element solver for 3D solids: Gmsh mesh in, ParaView
+//! (VTU/PVD) results and a CSV history out, driven by a TOML model file.
 //!
-//! Work in progress: see the project issues.
+//! Pipeline: [`gmsh::read_msh`] → [`model::Model::load`] →
+//! [`analysis::Analysis::new`] → [`driver::run`] (steps, load increments,
+//! Newton–Raphson with cutback, [`assembly`] in parallel, [`linsolve`] with
+//! faer) → [`output::ResultWriter`]. Contact and other terms from outside
+//! the element loop plug in through [`assembly::ExtraTerms`].
+
+// Index loops mirror the index notation of the formulas in the module docs.
+#![allow(clippy::needless_range_loop)]
+
+pub mod analysis;
+pub mod assembly;
+pub mod atomic;
+pub mod driver;
+pub mod element;
+pub mod error;
+pub mod face;
+pub mod follower;
+pub mod gmsh;
+pub mod hex8;
+pub mod linear_elastic;
+pub mod linsolve;
+pub mod loads;
+pub mod material;
+pub mod mesh;
+pub mod model;
+pub mod neo_hooke;
+pub mod newton;
+pub mod ordering;
+pub mod output;
+pub mod results;
+pub mod rigid;
+pub mod shape;
+pub mod structured;
+pub mod tet10;
+pub mod tet4;
+pub mod vtu;
+
+pub use error::{FemError, Result};
+
+/// Reads a model file and its mesh and resolves them.
+///
+/// # Errors
+/// Any model, mesh or validation error.
+pub fn load_analysis(model_path: &std::path::Path) -> Result<analysis::Analysis> {
+    let model = model::Model::load(model_path)?;
+    let mesh = gmsh::read_msh(&model.mesh_path())?;
+    analysis::Analysis::new(&model, mesh)
+}

@@ -1,0 +1,173 @@
+//! End-to-end tests of the `tricontact` binary on the committed example.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_tricontact"))
+}
+
+fn example() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cantilever/model.toml")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("tricontact-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("temp dir");
+    d
+}
+
+#[test]
+fn run_writes_vtu_pvd_and_history() {
+    let out = temp_dir("run");
+    let o = bin()
+        .args([
+            "run",
+            example().to_str().expect("utf8"),
+            "--verbose",
+            "--output",
+        ])
+        .arg(&out)
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(stdout.contains("step 1 'bend' inc   1"), "{stdout}");
+    assert!(stdout.contains("done: 6 increments"), "{stdout}");
+    let history = std::fs::read_to_string(out.join("history.csv")).expect("history");
+    let rows: Vec<&str> = history.lines().collect();
+    assert_eq!(rows.len(), 7, "{history}");
+    assert!(rows[0].starts_with("step,step_name,increment,load_factor"));
+    assert!(rows[0].contains("clamp_Ry"));
+    // Clamp reaction balances tip force (50) plus pressure (2 × 10 × 1) at the end of step 1.
+    let cols: Vec<&str> = rows[4].split(',').collect();
+    let ry: f64 = cols[9].parse().expect("number");
+    assert!((ry - 70.0).abs() < 1e-6, "{}", rows[4]);
+    let pvd = std::fs::read_to_string(out.join("model.pvd")).expect("pvd");
+    assert_eq!(pvd.matches("<DataSet").count(), 6);
+    let vtu = std::fs::read_to_string(out.join("model_001_0004.vtu")).expect("vtu");
+    assert!(vtu.contains("NumberOfPoints=\"189\"") && vtu.contains("NumberOfCells=\"80\""));
+    assert!(
+        std::fs::read_dir(&out).expect("dir").all(|e| !e
+            .expect("entry")
+            .path()
+            .to_string_lossy()
+            .ends_with(".tmp"))
+    );
+}
+
+#[test]
+fn check_prints_summary() {
+    let o = bin()
+        .args(["check", example().to_str().expect("utf8")])
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{stdout}");
+    assert!(stdout.contains("nodes: 189"), "{stdout}");
+    assert!(stdout.contains("hex8") && stdout.contains("80"), "{stdout}");
+    assert!(
+        stdout.contains("567 DOFs") && stdout.contains("540 free DOFs"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("no problems found"), "{stdout}");
+}
+
+#[test]
+fn failures_exit_non_zero_with_one_line() {
+    let d = temp_dir("bad");
+    let mesh = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cantilever/beam.msh");
+    std::fs::copy(mesh, d.join("beam.msh")).expect("copy");
+    let good = std::fs::read_to_string(example()).expect("model");
+    let cases = [
+        ("syntax.toml", good.replace("[[body]]", "[[body]"), "line"),
+        (
+            "group.toml",
+            good.replace("group = \"tip\"", "group = \"tipp\""),
+            "clamp (2D)",
+        ),
+        (
+            "unsupported.toml",
+            good.replace("fix = [\"x\", \"y\", \"z\"]", "fix = [\"x\"]"),
+            "rigid-body",
+        ),
+        (
+            "key.toml",
+            good.replace("nlgeom = true", "nlgoem = true"),
+            "nlgoem",
+        ),
+    ];
+    for (name, text, needle) in cases {
+        let p = d.join(name);
+        std::fs::write(&p, text).expect("write");
+        let cmd = if name == "unsupported.toml" {
+            "run"
+        } else {
+            "check"
+        };
+        let mut c = bin();
+        c.args([cmd, p.to_str().expect("utf8")]);
+        if cmd == "run" {
+            c.arg("--output").arg(d.join("out"));
+        }
+        let o = c.output().expect("runs");
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{name} should fail");
+        assert_eq!(stderr.lines().count(), 1, "{name}: {stderr}");
+        assert!(
+            stderr.starts_with("error: ") && stderr.contains(needle),
+            "{name}: {stderr}"
+        );
+    }
+    let o = bin()
+        .args(["run", d.join("absent.toml").to_str().expect("utf8")])
+        .output()
+        .expect("runs");
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("absent.toml"));
+}
+
+#[test]
+fn tet10_example_reactions_balance_the_pressure() {
+    let out = temp_dir("block");
+    let model =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/block-stretch/model.toml");
+    let o = bin()
+        .args(["run", model.to_str().expect("utf8"), "--output"])
+        .arg(&out)
+        .output()
+        .expect("runs");
+    assert!(
+        o.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let history = std::fs::read_to_string(out.join("history.csv")).expect("history");
+    let header: Vec<&str> = history.lines().next().expect("header").split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).expect("column");
+    let last: Vec<f64> = history
+        .lines()
+        .last()
+        .expect("row")
+        .split(',')
+        .enumerate()
+        .filter(|(i, _)| *i != 1)
+        .map(|(_, v)| v.parse().expect("number"))
+        .collect();
+    // Column indices shift by one after dropping step_name (index 1).
+    let get = |name: &str| last[col(name) - 1];
+    // Dead pressure 0.5 on the 2 × 1 top face pushes with 1.0 in −z.
+    let rz = get("left_Rz") + get("right_Rz");
+    assert!((rz - 1.0).abs() < 1e-6, "ΣRz = {rz}");
+    let rx = get("left_Rx") + get("right_Rx");
+    assert!(
+        rx.abs() < 1e-6 * get("right_Rx").abs().max(1.0),
+        "ΣRx = {rx}"
+    );
+    assert!(get("right_Rx") > 0.0, "stretching needs a positive force");
+}

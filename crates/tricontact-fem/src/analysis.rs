@@ -1,0 +1,522 @@
+//! Resolution of a [`Model`] against a [`Mesh`]: bodies, materials, supports,
+//! loads and steps as index data ready for assembly, plus validation.
+//!
+//! Validation collects every problem (unknown groups, materials, conflicting
+//! supports, loads on nodes of no body, inverted or zero-volume elements)
+//! instead of stopping at the first, so `tricontact check` can list them.
+//! An element is *zero-volume* when `min |det J| ≤ 1e-8 h³` at its
+//! integration points (`h` its largest corner distance) and *inverted* when
+//! some `det J < 0`.
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+
+use crate::element::jacobian_dets;
+use crate::error::{FemError, Result};
+use crate::loads;
+use crate::material::{Law, Material};
+use crate::mesh::{ElementKind, Mesh};
+use crate::model::{MaterialKind, Model, OutputDef};
+use crate::shape::{self, QPoint};
+
+/// A volume element taking part in the analysis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BodyElement {
+    /// Index into [`Mesh::elements`].
+    pub element: usize,
+    /// Index into [`Analysis::materials`].
+    pub material: usize,
+}
+
+/// A support or prescribed displacement on a node set.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Boundary {
+    /// Group name (history columns use it).
+    pub name: String,
+    /// Nodes (only nodes of bodies).
+    pub nodes: Vec<usize>,
+    /// Per component: `Some(target)` if constrained.
+    pub values: [Option<f64>; 3],
+    /// Active flag per step.
+    pub active: Vec<bool>,
+}
+
+/// A dead load as nodal forces at amplitude 1.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Load {
+    /// Group name.
+    pub name: String,
+    /// `(node, force)` pairs, sorted by node.
+    pub forces: Vec<(usize, [f64; 3])>,
+    /// Follower pressure `(p, oriented faces)`: in `nlgeom` steps it acts on
+    /// the deformed surface instead of `forces`.
+    pub follower: Option<(f64, Vec<(usize, f64)>)>,
+    /// Active flag per step.
+    pub active: Vec<bool>,
+}
+
+/// Step controls.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Step {
+    /// Name.
+    pub name: String,
+    /// Initial number of increments.
+    pub increments: usize,
+    /// Newton iterations per increment.
+    pub max_iterations: usize,
+    /// Relative residual tolerance.
+    pub residual_tolerance: f64,
+    /// Relative correction tolerance.
+    pub displacement_tolerance: f64,
+    /// Finite strain.
+    pub nlgeom: bool,
+    /// Allowed halvings of an increment.
+    pub max_cutbacks: usize,
+}
+
+/// Everything the solver needs, resolved to indices.
+#[derive(Clone, Debug)]
+pub struct Analysis {
+    /// The mesh.
+    pub mesh: Mesh,
+    /// Materials.
+    pub materials: Vec<Material>,
+    /// Volume elements in bodies.
+    pub body: Vec<BodyElement>,
+    /// Quadrature rules per volume kind.
+    pub rules: Vec<(ElementKind, Vec<QPoint>)>,
+    /// Nodes used by some body element.
+    pub active_nodes: Vec<bool>,
+    /// Supports.
+    pub boundaries: Vec<Boundary>,
+    /// Loads.
+    pub loads: Vec<Load>,
+    /// Steps.
+    pub steps: Vec<Step>,
+    /// Output settings.
+    pub output: OutputDef,
+    /// Resolved output folder.
+    pub output_dir: PathBuf,
+}
+
+impl Analysis {
+    /// Resolves and validates; fails with the single problem found or with
+    /// [`FemError::Invalid`] listing all of them.
+    ///
+    /// # Errors
+    /// Any validation problem.
+    pub fn new(model: &Model, mesh: Mesh) -> Result<Self> {
+        let (an, mut problems) = Self::build(model, mesh);
+        match problems.len() {
+            0 => Ok(an),
+            1 => Err(problems.remove(0)),
+            _ => Err(FemError::Invalid(
+                problems.iter().map(ToString::to_string).collect(),
+            )),
+        }
+    }
+
+    /// Quadrature rule of a volume kind.
+    #[must_use]
+    pub fn rule(&self, kind: ElementKind) -> &[QPoint] {
+        self.rules
+            .iter()
+            .find(|(k, _)| *k == kind)
+            .map_or(&[], |(_, r)| r.as_slice())
+    }
+
+    /// Number of nodal degrees of freedom (`3 × nodes`, inactive included).
+    #[must_use]
+    pub fn num_nodal_dofs(&self) -> usize {
+        3 * self.mesh.nodes.len()
+    }
+
+    /// Resolves the model, returning the analysis and every problem found.
+    #[must_use]
+    pub fn build(model: &Model, mesh: Mesh) -> (Self, Vec<FemError>) {
+        let mut problems: Vec<FemError> = Vec::new();
+        let unknown = |kind: &'static str, name: &str, mesh: &Mesh| FemError::UnknownGroup {
+            kind,
+            name: name.to_string(),
+            available: mesh.group_list(),
+        };
+        let invalid = |s: String| FemError::Invalid(vec![s]);
+
+        // Steps.
+        if model.steps.is_empty() {
+            problems.push(invalid("no [[step]] defined".into()));
+        }
+        let steps: Vec<Step> = model
+            .steps
+            .iter()
+            .enumerate()
+            .map(|(i, s)| Step {
+                name: model.step_name(i),
+                increments: s.increments,
+                max_iterations: s.max_iterations,
+                residual_tolerance: s.residual_tolerance,
+                displacement_tolerance: s.displacement_tolerance,
+                nlgeom: s.nlgeom,
+                max_cutbacks: s.max_cutbacks,
+            })
+            .collect();
+        for s in &steps {
+            if s.increments == 0 || s.max_iterations == 0 {
+                problems.push(invalid(format!(
+                    "step '{}': increments and max_iterations must be ≥ 1",
+                    s.name
+                )));
+            }
+            let valid = s.residual_tolerance > 0.0 && s.displacement_tolerance > 0.0;
+            if !valid {
+                problems.push(invalid(format!(
+                    "step '{}': tolerances must be > 0",
+                    s.name
+                )));
+            }
+        }
+        let step_mask = |steps_opt: &Option<Vec<String>>,
+                         what: &str,
+                         problems: &mut Vec<FemError>|
+         -> Vec<bool> {
+            match steps_opt {
+                None => vec![true; steps.len()],
+                Some(names) => {
+                    for n in names {
+                        if !steps.iter().any(|s| &s.name == n) {
+                            problems.push(invalid(format!(
+                                "{what}: unknown step '{n}' (steps: {})",
+                                steps
+                                    .iter()
+                                    .map(|s| s.name.as_str())
+                                    .collect::<Vec<_>>()
+                                    .join(", ")
+                            )));
+                        }
+                    }
+                    steps.iter().map(|s| names.contains(&s.name)).collect()
+                }
+            }
+        };
+
+        // Materials.
+        let mut materials = Vec::new();
+        let mut mat_index = HashMap::new();
+        for m in &model.materials {
+            let valid = m.e > 0.0 && m.nu > -1.0 && m.nu < 0.5;
+            if !valid {
+                problems.push(invalid(format!(
+                    "material '{}': need E > 0 and -1 < nu < 0.5 (got E = {}, nu = {})",
+                    m.name, m.e, m.nu
+                )));
+            }
+            if mat_index.insert(m.name.clone(), materials.len()).is_some() {
+                problems.push(invalid(format!("material '{}' defined twice", m.name)));
+            }
+            let law = match m.kind {
+                MaterialKind::LinearElastic => Law::LinearElastic,
+                MaterialKind::NeoHooke => Law::NeoHooke,
+            };
+            materials.push(Material::from_e_nu(law, m.e, m.nu));
+        }
+
+        // Bodies.
+        let mut body = Vec::new();
+        let mut owner: Vec<Option<usize>> = vec![None; mesh.elements.len()];
+        if model.bodies.is_empty() {
+            problems.push(invalid("no [[body]] defined".into()));
+        }
+        for b in &model.bodies {
+            let Some(&mi) = mat_index.get(&b.material) else {
+                problems.push(invalid(format!(
+                    "body '{}': unknown material '{}' (materials: {})",
+                    b.group,
+                    b.material,
+                    model
+                        .materials
+                        .iter()
+                        .map(|m| m.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )));
+                continue;
+            };
+            match mesh.group(&b.group) {
+                Some(g) if g.dim == 3 => {
+                    for &e in &g.elements {
+                        if owner[e].is_some() {
+                            problems.push(invalid(format!(
+                                "element {} is in two bodies",
+                                mesh.elements[e].tag
+                            )));
+                            continue;
+                        }
+                        owner[e] = Some(body.len());
+                        body.push(BodyElement {
+                            element: e,
+                            material: mi,
+                        });
+                    }
+                }
+                Some(g) => problems.push(invalid(format!(
+                    "body group '{}' has dimension {}, a volume (3D) group is needed",
+                    g.name, g.dim
+                ))),
+                None => problems.push(unknown("volume", &b.group, &mesh)),
+            }
+        }
+        let mut active_nodes = vec![false; mesh.nodes.len()];
+        for be in &body {
+            for &a in &mesh.elements[be.element].nodes {
+                active_nodes[a] = true;
+            }
+        }
+        let mut kinds: Vec<ElementKind> =
+            body.iter().map(|b| mesh.elements[b.element].kind).collect();
+        kinds.sort_unstable();
+        kinds.dedup();
+        let rules: Vec<(ElementKind, Vec<QPoint>)> =
+            kinds.iter().map(|&k| (k, shape::rule(k))).collect();
+
+        // Element quality.
+        let mut bad = 0usize;
+        for (bi, be) in body.iter().enumerate() {
+            let el = &mesh.elements[be.element];
+            let x0: Vec<[f64; 3]> = el.nodes.iter().map(|&a| mesh.nodes[a]).collect();
+            let rule = &rules
+                .iter()
+                .find(|(k, _)| *k == el.kind)
+                .expect("rule exists")
+                .1;
+            let dets = jacobian_dets(rule, &x0);
+            let corners = &x0[..el.kind.num_corners()];
+            let mut h = 0.0f64;
+            for p in corners {
+                for q in corners {
+                    h = h.max(
+                        ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2))
+                            .sqrt(),
+                    );
+                }
+            }
+            let min_abs = dets.iter().fold(f64::INFINITY, |m, d| m.min(d.abs()));
+            let min_det = dets.iter().fold(f64::INFINITY, |m, &d| m.min(d));
+            let problem = if min_abs <= 1e-8 * h.powi(3) {
+                Some(FemError::ZeroVolume {
+                    element: bi,
+                    tag: el.tag,
+                    det_j: min_abs / h.powi(3).max(f64::MIN_POSITIVE),
+                })
+            } else if min_det < 0.0 {
+                Some(FemError::InvertedElement {
+                    element: bi,
+                    tag: el.tag,
+                    det_j: min_det,
+                })
+            } else {
+                None
+            };
+            if let Some(p) = problem {
+                bad += 1;
+                if bad <= 10 {
+                    problems.push(p);
+                }
+            }
+        }
+        if bad > 10 {
+            problems.push(invalid(format!(
+                "{} more inverted or zero-volume elements",
+                bad - 10
+            )));
+        }
+
+        // Boundaries.
+        let mut boundaries = Vec::new();
+        for b in &model.boundaries {
+            let active = step_mask(&b.steps, &format!("boundary '{}'", b.group), &mut problems);
+            let Some(g) = mesh.group(&b.group) else {
+                problems.push(unknown("node", &b.group, &mesh));
+                continue;
+            };
+            let mut values = [None; 3];
+            for c in &b.fix {
+                values[c.index()] = Some(0.0);
+            }
+            if let Some(d) = &b.displacement {
+                for (i, v) in [d.x, d.y, d.z].into_iter().enumerate() {
+                    if let Some(v) = v {
+                        if values[i].is_some() {
+                            problems.push(invalid(format!(
+                                "boundary '{}': component {} is both fixed and prescribed",
+                                b.group,
+                                ["x", "y", "z"][i]
+                            )));
+                        }
+                        if !v.is_finite() {
+                            problems.push(invalid(format!(
+                                "boundary '{}': non-finite displacement",
+                                b.group
+                            )));
+                        }
+                        values[i] = Some(v);
+                    }
+                }
+            }
+            if values.iter().all(Option::is_none) {
+                problems.push(invalid(format!(
+                    "boundary '{}': give `fix` components or a `displacement`",
+                    b.group
+                )));
+            }
+            let nodes: Vec<usize> = g
+                .nodes
+                .iter()
+                .copied()
+                .filter(|&a| active_nodes[a])
+                .collect();
+            if nodes.is_empty() {
+                problems.push(invalid(format!(
+                    "boundary '{}': the group has no node of any body",
+                    b.group
+                )));
+            }
+            boundaries.push(Boundary {
+                name: b.group.clone(),
+                nodes,
+                values,
+                active,
+            });
+        }
+        // Conflicting prescribed values on a shared DOF within a step.
+        for s in 0..steps.len() {
+            let mut seen: HashMap<(usize, usize), (f64, &str)> = HashMap::new();
+            for b in boundaries.iter().filter(|b| b.active[s]) {
+                for &a in &b.nodes {
+                    for (i, v) in b.values.iter().enumerate() {
+                        let Some(v) = *v else { continue };
+                        if let Some(&(w, other)) = seen.get(&(a, i)) {
+                            if w != v {
+                                problems.push(invalid(format!(
+                                    "step '{}': boundaries '{}' and '{}' prescribe different values on node {}",
+                                    steps[s].name, other, b.name, mesh.node_tags[a]
+                                )));
+                            }
+                        } else {
+                            seen.insert((a, i), (v, &b.name));
+                        }
+                    }
+                }
+            }
+        }
+
+        // Loads.
+        let body_refs: Vec<&crate::mesh::Element> =
+            body.iter().map(|b| &mesh.elements[b.element]).collect();
+        let node_elems = loads::node_to_elements(mesh.nodes.len(), &body_refs);
+        let mut load_list = Vec::new();
+        for l in &model.loads {
+            let active = step_mask(&l.steps, &format!("load '{}'", l.group), &mut problems);
+            let Some(g) = mesh.group(&l.group) else {
+                let kind = if l.pressure.is_some() {
+                    "surface"
+                } else {
+                    "node"
+                };
+                problems.push(unknown(kind, &l.group, &mesh));
+                continue;
+            };
+            let mut follower = None;
+            if l.follower && l.pressure.is_none() {
+                problems.push(invalid(format!(
+                    "load '{}': `follower` applies to a pressure only",
+                    l.group
+                )));
+            }
+            let forces = match (l.force, l.pressure) {
+                (Some(f), None) => {
+                    let faces: Vec<usize> = if g.dim == 2 {
+                        g.elements.clone()
+                    } else {
+                        Vec::new()
+                    };
+                    let nodes: Vec<usize> = g
+                        .nodes
+                        .iter()
+                        .copied()
+                        .filter(|&a| active_nodes[a])
+                        .collect();
+                    if faces.is_empty() && nodes.is_empty() {
+                        problems.push(invalid(format!(
+                            "load '{}': the group has no node of any body",
+                            l.group
+                        )));
+                    }
+                    loads::total_force(&mesh, &faces, &nodes, f)
+                }
+                (None, Some(p)) => {
+                    if g.dim != 2 {
+                        problems.push(invalid(format!(
+                            "load '{}': pressure needs a surface (2D) group, '{}' has dimension {}",
+                            l.group, g.name, g.dim
+                        )));
+                        continue;
+                    }
+                    match loads::outward_faces(&mesh, &g.elements, &body_refs, &node_elems) {
+                        Ok(faces) => {
+                            let f = loads::pressure_forces(&mesh, &faces, p);
+                            if l.follower {
+                                follower = Some((p, faces));
+                            }
+                            f
+                        }
+                        Err(tag) => {
+                            problems.push(invalid(format!(
+                                "load '{}': face {tag} is not on the surface of a body",
+                                l.group
+                            )));
+                            continue;
+                        }
+                    }
+                }
+                _ => {
+                    problems.push(invalid(format!(
+                        "load '{}': give exactly one of `force` or `pressure`",
+                        l.group
+                    )));
+                    continue;
+                }
+            };
+            if forces.keys().any(|&a| !active_nodes[a]) {
+                problems.push(invalid(format!(
+                    "load '{}': applied to nodes of no body",
+                    l.group
+                )));
+            }
+            let mut forces: Vec<(usize, [f64; 3])> = forces.into_iter().collect();
+            forces.sort_by_key(|(a, _)| *a);
+            load_list.push(Load {
+                name: l.group.clone(),
+                forces,
+                follower,
+                active,
+            });
+        }
+        if model.output.every == 0 {
+            problems.push(invalid("output.every must be ≥ 1".into()));
+        }
+
+        let an = Self {
+            mesh,
+            materials,
+            body,
+            rules,
+            active_nodes,
+            boundaries,
+            loads: load_list,
+            steps,
+            output: model.output.clone(),
+            output_dir: model.output_dir(),
+        };
+        (an, problems)
+    }
+}

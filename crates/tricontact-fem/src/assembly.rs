@@ -1,0 +1,328 @@
+//! Equation numbering, sparsity pattern and parallel assembly.
+//!
+//! Global DOF `3a + i` is component `i` of node `a`; extra unknowns (e.g.
+//! contact multipliers) follow at `3 n_nodes + j`. Free DOFs of active
+//! nodes and all extra unknowns get equation numbers in increasing DOF
+//! order; prescribed DOFs are eliminated (their residual is the reaction).
+//!
+//! The residual is `r = f_int(u) − f_ext + r_extra(u)`; the tangent is
+//! `K = ∂r/∂u` restricted to free equations. For a prescribed-DOF increment
+//! `Δu_p` the predictor right-hand side `−K_fp Δu_p` is accumulated during
+//! the merge.
+//!
+//! Determinism: element blocks are computed in parallel (rayon) in batches,
+//! then merged into the matrix sequentially in element order, so the
+//! assembled values do not depend on the number of threads.
+
+use faer::sparse::{SparseColMat, SymbolicSparseColMat, Triplet};
+use rayon::prelude::*;
+
+use crate::analysis::Analysis;
+use crate::element::{Inverted, internal_force};
+
+/// Marker for a DOF without an equation.
+pub const NO_EQ: usize = usize::MAX;
+
+/// Contributions from outside the element loop (contact, springs, …).
+///
+/// `u` and `residual` are global DOF vectors (nodal then extra unknowns);
+/// triplets `(row, col, value)` use global DOF indices and add to `∂r/∂u`.
+pub trait ExtraTerms: Sync {
+    /// Number of unknowns beyond the nodal DOFs.
+    fn num_extra(&self) -> usize {
+        0
+    }
+    /// Whether the added tangent is symmetric (keeps Cholesky usable).
+    fn symmetric(&self) -> bool {
+        true
+    }
+    /// Adds to the residual and tangent at `u`.
+    fn add_terms(&self, u: &[f64], residual: &mut [f64], triplets: &mut Vec<(usize, usize, f64)>);
+}
+
+/// No extra terms.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoExtra;
+
+impl ExtraTerms for NoExtra {
+    fn add_terms(
+        &self,
+        _u: &[f64],
+        _residual: &mut [f64],
+        _triplets: &mut Vec<(usize, usize, f64)>,
+    ) {
+    }
+}
+
+/// Equation numbers of the global DOFs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DofMap {
+    /// `eq[dof]` or [`NO_EQ`].
+    pub eq: Vec<usize>,
+    /// Number of equations.
+    pub n_eq: usize,
+    /// Number of nodal DOFs (`3 × nodes`).
+    pub n_nodal: usize,
+}
+
+impl DofMap {
+    /// Numbers free DOFs of active nodes, then the extra unknowns.
+    #[must_use]
+    pub fn new(active_nodes: &[bool], prescribed: &[bool], n_extra: usize) -> Self {
+        let n_nodal = 3 * active_nodes.len();
+        let mut eq = vec![NO_EQ; n_nodal + n_extra];
+        let mut n = 0;
+        for (dof, e) in eq.iter_mut().enumerate() {
+            let free = if dof < n_nodal {
+                active_nodes[dof / 3] && !prescribed[dof]
+            } else {
+                true
+            };
+            if free {
+                *e = n;
+                n += 1;
+            }
+        }
+        Self {
+            eq,
+            n_eq: n,
+            n_nodal,
+        }
+    }
+}
+
+/// Sorted neighbour lists (self included) of every node through the body
+/// elements.
+#[must_use]
+pub fn node_adjacency(an: &Analysis) -> Vec<Vec<usize>> {
+    let mut adj: Vec<Vec<usize>> = vec![Vec::new(); an.mesh.nodes.len()];
+    for be in &an.body {
+        let nodes = &an.mesh.elements[be.element].nodes;
+        for &a in nodes {
+            adj[a].extend_from_slice(nodes);
+        }
+    }
+    adj.par_iter_mut().for_each(|v| {
+        v.sort_unstable();
+        v.dedup();
+    });
+    adj
+}
+
+/// Column-compressed sparsity of the element part of the tangent.
+#[derive(Clone, Debug)]
+pub struct Pattern {
+    /// Symbolic structure (sorted row indices).
+    pub symbolic: SymbolicSparseColMat<usize>,
+}
+
+impl Pattern {
+    /// Builds the pattern from the node adjacency of the body elements.
+    #[must_use]
+    pub fn new(an: &Analysis, dm: &DofMap) -> Self {
+        Self::from_adjacency(&node_adjacency(an), dm)
+    }
+
+    /// Builds the pattern from a node adjacency (see [`node_adjacency`]).
+    #[must_use]
+    pub fn from_adjacency(adj: &[Vec<usize>], dm: &DofMap) -> Self {
+        let mut col_ptr = Vec::with_capacity(dm.n_eq + 1);
+        let mut row_idx = Vec::new();
+        col_ptr.push(0);
+        for dof in 0..dm.eq.len() {
+            if dm.eq[dof] == NO_EQ {
+                continue;
+            }
+            if dof < dm.n_nodal {
+                for &a in &adj[dof / 3] {
+                    for i in 0..3 {
+                        let r = dm.eq[3 * a + i];
+                        if r != NO_EQ {
+                            row_idx.push(r);
+                        }
+                    }
+                }
+            }
+            col_ptr.push(row_idx.len());
+        }
+        let symbolic = SymbolicSparseColMat::new_checked(dm.n_eq, dm.n_eq, col_ptr, None, row_idx);
+        Self { symbolic }
+    }
+
+    /// Position of `(row, col)` in the value array.
+    #[inline]
+    #[must_use]
+    pub fn find(&self, row: usize, col: usize) -> Option<usize> {
+        let start = self.symbolic.col_ptr()[col];
+        let end = self.symbolic.col_ptr()[col + 1];
+        self.symbolic.row_idx()[start..end]
+            .binary_search(&row)
+            .ok()
+            .map(|p| start + p)
+    }
+}
+
+/// Result of one assembly.
+#[derive(Clone, Debug)]
+pub struct Assembled {
+    /// `f_int` over all global DOFs (extra residual terms added).
+    pub residual: Vec<f64>,
+    /// Tangent values on the [`Pattern`] (empty if not requested).
+    pub values: Vec<f64>,
+    /// Extra tangent triplets in equation numbering.
+    pub extra: Vec<Triplet<usize, usize, f64>>,
+    /// `−K_fp Δu_p` per equation (zero without a predictor).
+    pub predictor: Vec<f64>,
+}
+
+impl Assembled {
+    /// Tangent as a sparse matrix (element part plus extra triplets).
+    ///
+    /// # Panics
+    /// Only on internal inconsistency of the pattern.
+    #[must_use]
+    pub fn matrix(&self, pat: &Pattern) -> SparseColMat<usize, f64> {
+        let base = SparseColMat::new(pat.symbolic.clone(), self.values.clone());
+        if self.extra.is_empty() {
+            return base;
+        }
+        let n = pat.symbolic.nrows();
+        let extra =
+            SparseColMat::try_new_from_triplets(n, n, &self.extra).expect("valid extra triplets");
+        faer::sparse::ops::add(base.as_ref(), extra.as_ref()).expect("allocation")
+    }
+}
+
+/// Failure of an assembly: the body element (index into `Analysis::body`)
+/// where a point inverted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct InvertedAt(pub usize);
+
+const BATCH: usize = 4096;
+
+/// Element force vector and row-major tangent block.
+type Block = (Vec<f64>, Vec<f64>);
+
+/// Assembles internal forces, tangent (if `tangent`) and the predictor term
+/// for prescribed increments `dup` (global DOF vector) if given.
+///
+/// # Errors
+/// [`InvertedAt`] the first (in element order) inverted element.
+#[allow(clippy::too_many_arguments)]
+pub fn assemble(
+    an: &Analysis,
+    dm: &DofMap,
+    pat: &Pattern,
+    u: &[f64],
+    nlgeom: bool,
+    tangent: bool,
+    dup: Option<&[f64]>,
+    extra: &dyn ExtraTerms,
+) -> Result<Assembled, InvertedAt> {
+    let mut residual = vec![0.0; dm.eq.len()];
+    let mut values = if tangent {
+        vec![0.0; pat.symbolic.row_idx().len()]
+    } else {
+        Vec::new()
+    };
+    let mut predictor = vec![0.0; dm.n_eq];
+    for (batch_index, batch) in an.body.chunks(BATCH).enumerate() {
+        let blocks: Vec<Result<Block, Inverted>> = batch
+            .par_iter()
+            .map(|be| {
+                let el = &an.mesh.elements[be.element];
+                let n = el.nodes.len();
+                let x0: Vec<[f64; 3]> = el.nodes.iter().map(|&a| an.mesh.nodes[a]).collect();
+                let ue: Vec<[f64; 3]> = el
+                    .nodes
+                    .iter()
+                    .map(|&a| [u[3 * a], u[3 * a + 1], u[3 * a + 2]])
+                    .collect();
+                let mut f = vec![0.0; 3 * n];
+                let mut k = if tangent {
+                    vec![0.0; 9 * n * n]
+                } else {
+                    Vec::new()
+                };
+                internal_force(
+                    an.rule(el.kind),
+                    &x0,
+                    &ue,
+                    &an.materials[be.material],
+                    nlgeom,
+                    &mut f,
+                    if tangent { Some(&mut k) } else { None },
+                )?;
+                Ok((f, k))
+            })
+            .collect();
+        for (j, (be, block)) in batch.iter().zip(blocks).enumerate() {
+            let (f, k) = block.map_err(|_| InvertedAt(batch_index * BATCH + j))?;
+            let nodes = &an.mesh.elements[be.element].nodes;
+            let nd = 3 * nodes.len();
+            for (la, &a) in nodes.iter().enumerate() {
+                for i in 0..3 {
+                    residual[3 * a + i] += f[3 * la + i];
+                }
+            }
+            if !tangent {
+                continue;
+            }
+            for (lb, &b) in nodes.iter().enumerate() {
+                for kk in 0..3 {
+                    let col_dof = 3 * b + kk;
+                    let col = dm.eq[col_dof];
+                    let c = 3 * lb + kk;
+                    if col == NO_EQ {
+                        // Prescribed column: predictor term only.
+                        if let Some(dup) = dup {
+                            let d = dup[col_dof];
+                            if d != 0.0 {
+                                for (la, &a) in nodes.iter().enumerate() {
+                                    for i in 0..3 {
+                                        let r = dm.eq[3 * a + i];
+                                        if r != NO_EQ {
+                                            predictor[r] -= k[(3 * la + i) * nd + c] * d;
+                                        }
+                                    }
+                                }
+                            }
+                        }
+                        continue;
+                    }
+                    for (la, &a) in nodes.iter().enumerate() {
+                        // Rows of node `a` are contiguous in the column.
+                        let mut pos = None;
+                        for i in 0..3 {
+                            let r = dm.eq[3 * a + i];
+                            if r == NO_EQ {
+                                continue;
+                            }
+                            let p = match pos {
+                                Some(p) => p + 1,
+                                None => pat.find(r, col).expect("entry in pattern"),
+                            };
+                            values[p] += k[(3 * la + i) * nd + c];
+                            pos = Some(p);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let mut trip = Vec::new();
+    extra.add_terms(u, &mut residual, &mut trip);
+    let extra_triplets = trip
+        .into_iter()
+        .filter_map(|(r, c, v)| {
+            let (er, ec) = (dm.eq[r], dm.eq[c]);
+            (er != NO_EQ && ec != NO_EQ).then(|| Triplet::new(er, ec, v))
+        })
+        .collect();
+    Ok(Assembled {
+        residual,
+        values,
+        extra: extra_triplets,
+        predictor,
+    })
+}

@@ -1,0 +1,336 @@
+//! Steps and load increments with automatic cutback.
+//!
+//! Within step `s` the load factor `t` runs from 0 to 1. A load's amplitude
+//! goes linearly from its value at the end of the previous step (1 if it was
+//! active there, else 0) to 1 (active in `s`) or 0 (inactive). A
+//! constrained DOF goes linearly from its displacement at the start of the
+//! step to its target (0 for `fix`), reached at `t = 1`. DOFs of inactive
+//! boundaries are free; the reaction a DOF carried when it is released is
+//! applied as a force ramped from full to zero over the step.
+//!
+//! Increment control: start with `Δt = 1/increments`; on a [`Failure`] the
+//! state is restored to the last converged increment and `Δt` is halved (at
+//! most `max_cutbacks` times in a row); after two converged increments in a
+//! row `Δt` doubles back, up to its initial value. State (`u`) is committed
+//! only at converged increments.
+
+use crate::analysis::{Analysis, Load};
+use crate::assembly::{DofMap, ExtraTerms, Pattern, node_adjacency};
+use crate::error::{FemError, Result};
+use crate::linsolve::LinearSolver;
+use crate::newton::{Failure, IncrementProblem, solve_increment};
+use crate::ordering::equation_order;
+use crate::rigid::check_supports;
+
+/// What a converged increment reports to the observer.
+#[derive(Debug)]
+pub struct IncrementInfo<'a> {
+    /// Step index (0-based).
+    pub step: usize,
+    /// Step name.
+    pub step_name: &'a str,
+    /// Increment number within the step (1-based).
+    pub increment: usize,
+    /// Load factor within the step, 0..=1.
+    pub load_factor: f64,
+    /// Total time: step index + load factor.
+    pub time: f64,
+    /// Newton iterations (linear solves).
+    pub iterations: usize,
+    /// Residual norms (predictor, then each iteration).
+    pub residuals: &'a [f64],
+    /// Reference norm of the relative residual test.
+    pub reference: f64,
+    /// Cutbacks taken before this increment converged.
+    pub cutbacks: usize,
+    /// Displacements over global DOFs (`3a + i`, then extra unknowns).
+    pub u: &'a [f64],
+    /// Reaction forces at prescribed DOFs (0 elsewhere), global DOFs.
+    pub reactions: &'a [f64],
+    /// Finite strain.
+    pub nlgeom: bool,
+    /// Factorization used last.
+    pub method: &'a str,
+}
+
+/// Totals of a run.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RunSummary {
+    /// Converged increments.
+    pub increments: usize,
+    /// Newton iterations.
+    pub iterations: usize,
+    /// Cutbacks.
+    pub cutbacks: usize,
+    /// Final displacements.
+    pub u: Vec<f64>,
+}
+
+/// Increment-size control of one step (see the module doc).
+#[derive(Clone, Debug, PartialEq)]
+pub struct IncrementControl {
+    /// Initial (and largest) increment.
+    pub dt0: f64,
+    /// Current increment.
+    pub dt: f64,
+    /// Converged increments in a row since the last failure or growth.
+    pub streak: usize,
+    /// Cutbacks of the increment being attempted.
+    pub cutbacks_here: usize,
+    /// Allowed cutbacks per increment.
+    pub max_cutbacks: usize,
+}
+
+impl IncrementControl {
+    /// `increments` equal increments initially.
+    #[must_use]
+    pub fn new(increments: usize, max_cutbacks: usize) -> Self {
+        let dt0 = 1.0 / increments.max(1) as f64;
+        Self {
+            dt0,
+            dt: dt0,
+            streak: 0,
+            cutbacks_here: 0,
+            max_cutbacks,
+        }
+    }
+
+    /// Load factor at the end of the next increment from `t` (snaps to 1).
+    #[must_use]
+    pub fn target(&self, t: f64) -> f64 {
+        if t + self.dt > 1.0 - 1e-9 {
+            1.0
+        } else {
+            t + self.dt
+        }
+    }
+
+    /// Records a converged increment; doubles `dt` (up to `dt0`) after two
+    /// in a row.
+    pub fn converged(&mut self) {
+        self.cutbacks_here = 0;
+        self.streak += 1;
+        if self.streak >= 2 && self.dt < self.dt0 {
+            self.dt = (2.0 * self.dt).min(self.dt0);
+            self.streak = 0;
+        }
+    }
+
+    /// Records a failed attempt: halves `dt`; `false` when the cutbacks of
+    /// this increment are exhausted.
+    #[must_use]
+    pub fn failed(&mut self) -> bool {
+        self.cutbacks_here += 1;
+        self.streak = 0;
+        self.dt /= 2.0;
+        self.cutbacks_here <= self.max_cutbacks
+    }
+}
+
+/// Prescribed mask and targets of a step.
+#[must_use]
+pub fn step_constraints(an: &Analysis, s: usize) -> (Vec<bool>, Vec<(usize, f64)>) {
+    let mut mask = vec![false; an.num_nodal_dofs()];
+    let mut targets = Vec::new();
+    for b in an.boundaries.iter().filter(|b| b.active[s]) {
+        for &a in &b.nodes {
+            for (i, v) in b.values.iter().enumerate() {
+                if let Some(v) = v {
+                    let dof = 3 * a + i;
+                    if !mask[dof] {
+                        mask[dof] = true;
+                        targets.push((dof, *v));
+                    }
+                }
+            }
+        }
+    }
+    targets.sort_by_key(|t| t.0);
+    (mask, targets)
+}
+
+/// Amplitude of load `l` in step `s` at load factor `t` (see module doc).
+#[must_use]
+pub fn amplitude(l: &Load, s: usize, t: f64) -> f64 {
+    let prev = if s > 0 && l.active[s - 1] { 1.0 } else { 0.0 };
+    let target = if l.active[s] { 1.0 } else { 0.0 };
+    prev + t * (target - prev)
+}
+
+/// Follower pressures acting in step `s` at `t`: `(load index, p × amplitude)`.
+#[must_use]
+pub fn follower_pressures(an: &Analysis, s: usize, t: f64) -> Vec<(usize, f64)> {
+    if !an.steps[s].nlgeom {
+        return Vec::new();
+    }
+    an.loads
+        .iter()
+        .enumerate()
+        .filter_map(|(i, l)| {
+            let (p, _) = l.follower.as_ref()?;
+            let amp = amplitude(l, s, t);
+            (amp != 0.0).then_some((i, p * amp))
+        })
+        .collect()
+}
+
+/// External dead-load vector (global DOFs) in step `s` at load factor `t`
+/// (follower pressures of `nlgeom` steps excluded: see [`follower_pressures`]).
+#[must_use]
+pub fn external_forces(an: &Analysis, n_dofs: usize, s: usize, t: f64) -> Vec<f64> {
+    let mut f = vec![0.0; n_dofs];
+    for l in &an.loads {
+        if l.follower.is_some() && an.steps[s].nlgeom {
+            continue;
+        }
+        let amp = amplitude(l, s, t);
+        if amp == 0.0 {
+            continue;
+        }
+        for (a, v) in &l.forces {
+            for i in 0..3 {
+                f[3 * a + i] += amp * v[i];
+            }
+        }
+    }
+    f
+}
+
+/// Runs all steps; `observer` sees each converged increment.
+///
+/// # Errors
+/// Singular model, non-convergence after all cutbacks, observer errors.
+pub fn run(
+    an: &Analysis,
+    extra: &dyn ExtraTerms,
+    observer: &mut dyn FnMut(&IncrementInfo<'_>) -> Result<()>,
+) -> Result<RunSummary> {
+    let n_dofs = an.num_nodal_dofs() + extra.num_extra();
+    let mut u = vec![0.0; n_dofs];
+    let mut summary = RunSummary::default();
+    let mut prev_mask: Vec<bool> = Vec::new();
+    let mut last_reactions = vec![0.0; n_dofs];
+    for (s, step) in an.steps.iter().enumerate() {
+        let (mask, targets) = step_constraints(an, s);
+        if extra.num_extra() == 0 {
+            check_supports(an, &mask)
+                .map_err(|m| FemError::Singular(format!("step '{}': {m}", step.name)))?;
+        }
+        let dm = DofMap::new(&an.active_nodes, &mask, extra.num_extra());
+        let adj = node_adjacency(an);
+        let pat = Pattern::from_adjacency(&adj, &dm);
+        let mut solver = LinearSolver::new().with_order(equation_order(&an.mesh.nodes, &adj, &dm));
+        drop(adj);
+        let u_step = u.clone();
+        // Reactions of DOFs released at this step are ramped down to zero.
+        let released: Vec<(usize, f64)> = (0..an.num_nodal_dofs())
+            .filter(|&d| prev_mask.get(d).copied().unwrap_or(false) && !mask[d])
+            .map(|d| (d, last_reactions[d]))
+            .collect();
+        let mut control = IncrementControl::new(step.increments, step.max_cutbacks);
+        let mut t = 0.0;
+        let mut increment = 0;
+        while t < 1.0 - 1e-12 {
+            let t_new = control.target(t);
+            let mut fext = external_forces(an, n_dofs, s, t_new);
+            for &(d, r) in &released {
+                fext[d] += (1.0 - t_new) * r;
+            }
+            let prescribed: Vec<(usize, f64)> = targets
+                .iter()
+                .map(|&(dof, v)| (dof, u_step[dof] + t_new * (v - u_step[dof])))
+                .collect();
+            let follower = follower_pressures(an, s, t_new);
+            let problem = IncrementProblem {
+                an,
+                dm: &dm,
+                pat: &pat,
+                extra,
+                step,
+                fext: &fext,
+                prescribed: &prescribed,
+                follower: &follower,
+            };
+            match solve_increment(&problem, &u, &mut solver) {
+                Ok(c) => {
+                    u = c.u;
+                    t = t_new;
+                    increment += 1;
+                    summary.increments += 1;
+                    summary.iterations += c.iterations;
+                    let mut reactions = vec![0.0; n_dofs];
+                    for &(dof, _) in &targets {
+                        reactions[dof] = c.residual[dof];
+                    }
+                    last_reactions.clone_from(&reactions);
+                    observer(&IncrementInfo {
+                        step: s,
+                        step_name: &step.name,
+                        increment,
+                        load_factor: t,
+                        time: s as f64 + t,
+                        iterations: c.iterations,
+                        residuals: &c.residuals,
+                        reference: c.reference,
+                        cutbacks: control.cutbacks_here,
+                        u: &u,
+                        reactions: &reactions,
+                        nlgeom: step.nlgeom,
+                        method: c.method,
+                    })?;
+                    control.converged();
+                }
+                Err(failure) => {
+                    if let (Failure::Singular(m), false) = (&failure, step.nlgeom) {
+                        return Err(FemError::Singular(format!("step '{}': {m}", step.name)));
+                    }
+                    summary.cutbacks += 1;
+                    if !control.failed() {
+                        return Err(FemError::NotConverged {
+                            step: step.name.clone(),
+                            load_factor: t,
+                            reason: format!("{failure} (after {} cutbacks)", step.max_cutbacks),
+                        });
+                    }
+                }
+            }
+        }
+        prev_mask = mask;
+    }
+    summary.u = u;
+    Ok(summary)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn halves_on_failure_and_grows_back_after_two_successes() {
+        let mut c = IncrementControl::new(4, 2);
+        assert!((c.target(0.0) - 0.25).abs() < 1e-15);
+        assert!(c.failed());
+        assert!(c.failed());
+        assert!((c.dt - 0.0625).abs() < 1e-15);
+        assert!(!c.failed(), "third cutback exceeds max_cutbacks = 2");
+        let mut c = IncrementControl::new(4, 2);
+        assert!(c.failed() && c.failed());
+        c.converged();
+        assert!((c.dt - 0.0625).abs() < 1e-15, "one success: no growth");
+        c.converged();
+        assert!((c.dt - 0.125).abs() < 1e-15);
+        c.converged();
+        c.converged();
+        assert!((c.dt - 0.25).abs() < 1e-15);
+        c.converged();
+        c.converged();
+        assert!(
+            (c.dt - 0.25).abs() < 1e-15,
+            "never beyond the initial increment"
+        );
+        assert!(
+            (c.target(0.9) - 1.0).abs() < 1e-15,
+            "snaps to the end of the step"
+        );
+    }
+}

@@ -1,0 +1,113 @@
+//! Typed errors of the finite-element host.
+//!
+//! Every failure a user can cause (bad model file, bad mesh, a singular or
+//! diverging analysis) maps to one variant whose `Display` is a single line
+//! that names the cause, so the command line can print it as is.
+
+use std::path::PathBuf;
+
+/// Errors raised while reading, checking or solving a model.
+#[derive(Debug, thiserror::Error)]
+pub enum FemError {
+    /// A file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file concerned.
+        path: PathBuf,
+        /// The operating-system error.
+        source: std::io::Error,
+    },
+    /// The model file is not valid TOML or does not match the schema.
+    #[error("{path}: {message}")]
+    ModelSyntax {
+        /// The model file.
+        path: PathBuf,
+        /// Parser message, including line and column.
+        message: String,
+    },
+    /// The mesh file could not be parsed.
+    #[error("mesh {path}: {message}")]
+    Mesh {
+        /// The mesh file.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+    /// The mesh contains an element type the solver does not support.
+    #[error("mesh {path}: unsupported element type {kind} in physical group '{group}'")]
+    UnsupportedElement {
+        /// The mesh file.
+        path: PathBuf,
+        /// The Gmsh element type name.
+        kind: String,
+        /// The group it belongs to.
+        group: String,
+    },
+    /// The model refers to a physical group that is not in the mesh.
+    #[error("unknown {kind} group '{name}' (groups in the mesh: {available})")]
+    UnknownGroup {
+        /// Which kind of group was expected (volume, surface, node).
+        kind: &'static str,
+        /// The missing name.
+        name: String,
+        /// Comma-separated list of the groups that exist.
+        available: String,
+    },
+    /// The model is inconsistent; every problem found is listed.
+    #[error("invalid model: {}", .0.join("; "))]
+    Invalid(Vec<String>),
+    /// An element has a non-positive Jacobian in the reference configuration.
+    #[error(
+        "element {element} (Gmsh tag {tag}) is inverted: Jacobian determinant {det_j:.3e} < 0 at an integration point"
+    )]
+    InvertedElement {
+        /// Internal element index.
+        element: usize,
+        /// Gmsh element tag.
+        tag: u64,
+        /// The offending determinant.
+        det_j: f64,
+    },
+    /// An element has (numerically) zero volume.
+    #[error(
+        "element {element} (Gmsh tag {tag}) has zero volume (Jacobian determinant {det_j:.3e} relative to its size)"
+    )]
+    ZeroVolume {
+        /// Internal element index.
+        element: usize,
+        /// Gmsh element tag.
+        tag: u64,
+        /// The determinant scaled by the element size cubed.
+        det_j: f64,
+    },
+    /// The stiffness matrix is singular (e.g. a body without enough supports).
+    #[error("singular system: {0}")]
+    Singular(String),
+    /// The analysis did not converge even after the allowed cutbacks.
+    #[error("step '{step}' did not converge at load factor {load_factor:.6}: {reason}")]
+    NotConverged {
+        /// Step name.
+        step: String,
+        /// Load factor reached in the step.
+        load_factor: f64,
+        /// Last failure reason.
+        reason: String,
+    },
+    /// Writing results failed.
+    #[error("output: {0}")]
+    Output(String),
+}
+
+/// Shorthand result type.
+pub type Result<T, E = FemError> = std::result::Result<T, E>;
+
+impl FemError {
+    /// Wraps an I/O error with the path it concerns.
+    #[must_use]
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Self::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}

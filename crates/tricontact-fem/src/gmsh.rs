@@ -1,0 +1,261 @@
+//! Gmsh `.msh` 4.1 reader (ASCII and binary) built on the `mshio` crate.
+//!
+//! `mshio` parses entities, nodes and elements but skips `$PhysicalNames`, so
+//! that short (always ASCII) section is read here: lines `dim tag "name"`.
+//! An element block belongs to a geometric entity `(dim, tag)`; the entity
+//! lists its physical tags, and each `(dim, physical tag)` is one named
+//! [`Group`]. Unnamed groups are named by their tag number.
+//!
+//! Node tags: when the file's node tags are dense, `mshio` does not return
+//! them; they are then `min_node_tag, min_node_tag + 1, …` in file order
+//! (which is how Gmsh writes dense tags).
+
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+
+use mshio::mshfile::ElementType;
+
+use crate::error::{FemError, Result};
+use crate::mesh::{Element, ElementKind, Group, Mesh};
+
+/// Reads a Gmsh 4.1 mesh file.
+///
+/// # Errors
+/// I/O errors, parse errors, unsupported element types in a physical group.
+pub fn read_msh(path: &Path) -> Result<Mesh> {
+    let bytes = std::fs::read(path).map_err(|e| FemError::io(path, e))?;
+    parse_msh(&bytes, path)
+}
+
+/// Parses the `$PhysicalNames` section: `(dim, tag) -> name`.
+///
+/// # Errors
+/// A malformed section.
+pub fn parse_physical_names(bytes: &[u8], path: &Path) -> Result<HashMap<(i32, i32), String>> {
+    let mut names = HashMap::new();
+    let Some(start) = find(bytes, b"$PhysicalNames") else {
+        return Ok(names);
+    };
+    let rest = &bytes[start + b"$PhysicalNames".len()..];
+    let end = find(rest, b"$EndPhysicalNames").ok_or_else(|| FemError::Mesh {
+        path: path.to_path_buf(),
+        message: "$PhysicalNames without $EndPhysicalNames".into(),
+    })?;
+    let text = String::from_utf8_lossy(&rest[..end]);
+    let bad = |line: &str| FemError::Mesh {
+        path: path.to_path_buf(),
+        message: format!("malformed $PhysicalNames line '{line}'"),
+    };
+    let mut lines = text.lines().map(str::trim).filter(|l| !l.is_empty());
+    let count: usize = lines
+        .next()
+        .and_then(|l| l.parse().ok())
+        .ok_or_else(|| bad("<count>"))?;
+    for _ in 0..count {
+        let line = lines.next().ok_or_else(|| bad("<missing>"))?;
+        let mut it = line.splitn(3, char::is_whitespace);
+        let dim: i32 = it
+            .next()
+            .and_then(|s| s.parse().ok())
+            .ok_or_else(|| bad(line))?;
+        let tag: i32 = it
+            .next()
+            .and_then(|s| s.parse().ok())
+            .ok_or_else(|| bad(line))?;
+        let name = it.next().ok_or_else(|| bad(line))?.trim().trim_matches('"');
+        names.insert((dim, tag), name.to_string());
+    }
+    Ok(names)
+}
+
+fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
+    hay.windows(needle.len()).position(|w| w == needle)
+}
+
+fn kind_of(t: ElementType) -> Option<ElementKind> {
+    Some(match t {
+        ElementType::Tet4 => ElementKind::Tet4,
+        ElementType::Tet10 => ElementKind::Tet10,
+        ElementType::Hex8 => ElementKind::Hex8,
+        ElementType::Tri3 => ElementKind::Tri3,
+        ElementType::Tri6 => ElementKind::Tri6,
+        ElementType::Qua4 => ElementKind::Quad4,
+        _ => return None,
+    })
+}
+
+/// Parses the bytes of a `.msh` file (`path` is used in messages only).
+///
+/// # Errors
+/// See [`read_msh`].
+pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<Mesh> {
+    let merr = |message: String| FemError::Mesh {
+        path: path.to_path_buf(),
+        message,
+    };
+    if !bytes.starts_with(b"$MeshFormat") {
+        return Err(merr("not a Gmsh mesh file (no $MeshFormat header)".into()));
+    }
+    let version_line = bytes
+        .split(|&b| b == b'\n')
+        .nth(1)
+        .map(|l| String::from_utf8_lossy(l).trim().to_string())
+        .unwrap_or_default();
+    if !version_line.starts_with("4.1") {
+        return Err(merr(format!(
+            "only MSH format 4.1 is supported, found '{version_line}' (export with Mesh.MshFileVersion = 4.1)"
+        )));
+    }
+    let names = parse_physical_names(bytes, path)?;
+    let msh = mshio::parse_msh_bytes(bytes).map_err(|e| {
+        // mshio's message spans several lines and ends with a hex dump: keep
+        // the context chain on one line.
+        let text = e.to_string();
+        let text = text.split("Hex dump").next().unwrap_or_default();
+        merr(format!(
+            "parse error: {}",
+            text.split_whitespace().collect::<Vec<_>>().join(" ")
+        ))
+    })?;
+
+    // Entity (dim, tag) -> physical tags.
+    let mut entity_phys: HashMap<(i32, i32), Vec<i32>> = HashMap::new();
+    if let Some(ent) = &msh.data.entities {
+        for p in &ent.points {
+            entity_phys.insert((0, p.tag), p.physical_tags.clone());
+        }
+        for c in &ent.curves {
+            entity_phys.insert((1, c.tag), c.physical_tags.clone());
+        }
+        for s in &ent.surfaces {
+            entity_phys.insert((2, s.tag), s.physical_tags.clone());
+        }
+        for v in &ent.volumes {
+            entity_phys.insert((3, v.tag), v.physical_tags.clone());
+        }
+    }
+
+    // Nodes.
+    let mut mesh = Mesh::default();
+    let mut tag_to_index: HashMap<u64, usize> = HashMap::new();
+    if let Some(nodes) = &msh.data.nodes {
+        let mut next_dense = nodes.min_node_tag;
+        for block in &nodes.node_blocks {
+            let mut block_tags = vec![0u64; block.nodes.len()];
+            match &block.node_tags {
+                Some(map) => {
+                    for (&tag, &i) in map {
+                        if let Some(slot) = block_tags.get_mut(i) {
+                            *slot = tag;
+                        }
+                    }
+                }
+                None => {
+                    for t in &mut block_tags {
+                        *t = next_dense;
+                        next_dense += 1;
+                    }
+                }
+            }
+            for (node, tag) in block.nodes.iter().zip(block_tags) {
+                tag_to_index.insert(tag, mesh.nodes.len());
+                mesh.nodes.push([node.x, node.y, node.z]);
+                mesh.node_tags.push(tag);
+            }
+        }
+    }
+    if mesh.nodes.is_empty() {
+        return Err(merr("the mesh has no nodes".into()));
+    }
+
+    // Elements into groups keyed by (dim, physical tag).
+    let mut groups: BTreeMap<(i32, i32), Group> = BTreeMap::new();
+    let group_name = |dim: i32, tag: i32| {
+        names
+            .get(&(dim, tag))
+            .cloned()
+            .unwrap_or_else(|| tag.to_string())
+    };
+    if let Some(elements) = &msh.data.elements {
+        for block in &elements.element_blocks {
+            let dim = block.entity_dim;
+            let phys = entity_phys
+                .get(&(dim, block.entity_tag))
+                .cloned()
+                .unwrap_or_default();
+            if phys.is_empty() {
+                continue;
+            }
+            let kind = kind_of(block.element_type);
+            let is_node_only = matches!(
+                block.element_type,
+                ElementType::Pnt | ElementType::Lin2 | ElementType::Lin3
+            ) || dim < 2;
+            if kind.is_none() && !is_node_only {
+                return Err(FemError::UnsupportedElement {
+                    path: path.to_path_buf(),
+                    kind: format!("{:?}", block.element_type),
+                    group: group_name(dim, phys[0]),
+                });
+            }
+            for el in &block.elements {
+                let mut idx = Vec::with_capacity(el.nodes.len());
+                for t in &el.nodes {
+                    let i = tag_to_index.get(t).copied().ok_or_else(|| {
+                        merr(format!(
+                            "element {} refers to unknown node {t}",
+                            el.element_tag
+                        ))
+                    })?;
+                    idx.push(i);
+                }
+                let element_index = match kind {
+                    Some(k) if !is_node_only => {
+                        if idx.len() != k.num_nodes() {
+                            return Err(merr(format!(
+                                "element {} has {} nodes, expected {}",
+                                el.element_tag,
+                                idx.len(),
+                                k.num_nodes()
+                            )));
+                        }
+                        mesh.elements.push(Element {
+                            kind: k,
+                            nodes: idx.clone(),
+                            tag: el.element_tag,
+                        });
+                        Some(mesh.elements.len() - 1)
+                    }
+                    _ => None,
+                };
+                for &p in &phys {
+                    let g = groups.entry((dim, p)).or_insert_with(|| Group {
+                        name: group_name(dim, p),
+                        dim: usize::try_from(dim).unwrap_or(0),
+                        elements: Vec::new(),
+                        nodes: Vec::new(),
+                    });
+                    if let Some(e) = element_index {
+                        g.elements.push(e);
+                    }
+                    g.nodes.extend_from_slice(&idx);
+                }
+            }
+        }
+    }
+    for g in groups.values_mut() {
+        g.nodes.sort_unstable();
+        g.nodes.dedup();
+    }
+    // Named groups that have no elements still exist (empty).
+    for (&(dim, tag), name) in &names {
+        groups.entry((dim, tag)).or_insert_with(|| Group {
+            name: name.clone(),
+            dim: usize::try_from(dim).unwrap_or(0),
+            elements: Vec::new(),
+            nodes: Vec::new(),
+        });
+    }
+    mesh.groups = groups.into_values().collect();
+    Ok(mesh)
+}

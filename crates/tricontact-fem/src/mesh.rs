@@ -1,0 +1,159 @@
+//! In-memory mesh: node coordinates, elements and named physical groups.
+//!
+//! Node and element indices are 0-based positions in the vectors below; the
+//! original Gmsh tags are kept for messages. Element node order follows Gmsh
+//! (which equals VTK for tet4 and hex8; tet10 differs from VTK in nodes 8/9,
+//! see [`crate::vtu`]).
+//!
+//! A physical group of dimension 3 is an *element set*, of dimension 2 a
+//! *surface* (its triangle/quad faces), and every group is a *node set*.
+
+/// Supported element types.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum ElementKind {
+    /// 4-node linear tetrahedron.
+    Tet4,
+    /// 10-node quadratic tetrahedron.
+    Tet10,
+    /// 8-node trilinear hexahedron.
+    Hex8,
+    /// 3-node triangle face.
+    Tri3,
+    /// 6-node quadratic triangle face.
+    Tri6,
+    /// 4-node bilinear quadrilateral face.
+    Quad4,
+}
+
+impl ElementKind {
+    /// Number of nodes.
+    #[must_use]
+    pub fn num_nodes(self) -> usize {
+        match self {
+            Self::Tet4 => 4,
+            Self::Tet10 => 10,
+            Self::Hex8 => 8,
+            Self::Tri3 => 3,
+            Self::Tri6 => 6,
+            Self::Quad4 => 4,
+        }
+    }
+
+    /// Topological dimension (3 for volumes, 2 for faces).
+    #[must_use]
+    pub fn dim(self) -> usize {
+        match self {
+            Self::Tet4 | Self::Tet10 | Self::Hex8 => 3,
+            Self::Tri3 | Self::Tri6 | Self::Quad4 => 2,
+        }
+    }
+
+    /// Number of corner (vertex) nodes, which come first in the node list.
+    #[must_use]
+    pub fn num_corners(self) -> usize {
+        match self {
+            Self::Tet4 | Self::Tet10 => 4,
+            Self::Hex8 => 8,
+            Self::Tri3 | Self::Tri6 => 3,
+            Self::Quad4 => 4,
+        }
+    }
+
+    /// Short name used in summaries.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Tet4 => "tet4",
+            Self::Tet10 => "tet10",
+            Self::Hex8 => "hex8",
+            Self::Tri3 => "tri3",
+            Self::Tri6 => "tri6",
+            Self::Quad4 => "quad4",
+        }
+    }
+}
+
+/// One volume or face element.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Element {
+    /// Element type.
+    pub kind: ElementKind,
+    /// Node indices (0-based), Gmsh order.
+    pub nodes: Vec<usize>,
+    /// Gmsh element tag (for messages).
+    pub tag: u64,
+}
+
+/// A named physical group.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Group {
+    /// Physical name (or the tag number as text when unnamed).
+    pub name: String,
+    /// Dimension of the group (0..=3).
+    pub dim: usize,
+    /// Elements (indices into [`Mesh::elements`]) for dimension 2 and 3.
+    pub elements: Vec<usize>,
+    /// Sorted, unique node indices of every entity in the group.
+    pub nodes: Vec<usize>,
+}
+
+/// A mesh with its physical groups.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    /// Node coordinates.
+    pub nodes: Vec<[f64; 3]>,
+    /// Gmsh node tags, parallel to `nodes`.
+    pub node_tags: Vec<u64>,
+    /// Volume and face elements that belong to physical groups.
+    pub elements: Vec<Element>,
+    /// Physical groups.
+    pub groups: Vec<Group>,
+}
+
+impl Mesh {
+    /// Finds a group by name.
+    #[must_use]
+    pub fn group(&self, name: &str) -> Option<&Group> {
+        self.groups.iter().find(|g| g.name == name)
+    }
+
+    /// Comma-separated description of the groups, e.g. `beam (3D), tip (2D)`.
+    #[must_use]
+    pub fn group_list(&self) -> String {
+        if self.groups.is_empty() {
+            return "none".to_string();
+        }
+        self.groups
+            .iter()
+            .map(|g| format!("{} ({}D)", g.name, g.dim))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    /// Characteristic length: the diagonal of the bounding box.
+    #[must_use]
+    pub fn size(&self) -> f64 {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for p in &self.nodes {
+            for i in 0..3 {
+                lo[i] = lo[i].min(p[i]);
+                hi[i] = hi[i].max(p[i]);
+            }
+        }
+        if self.nodes.is_empty() {
+            return 0.0;
+        }
+        ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt()
+    }
+
+    /// Counts elements per kind, in kind order.
+    #[must_use]
+    pub fn count_kinds(&self) -> Vec<(ElementKind, usize)> {
+        let mut counts = std::collections::BTreeMap::new();
+        for e in &self.elements {
+            *counts.entry(e.kind).or_insert(0usize) += 1;
+        }
+        counts.into_iter().collect()
+    }
+}

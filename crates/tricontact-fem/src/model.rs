@@ -1,0 +1,371 @@
+//! The TOML model file: schema, defaults and loading.
+//!
+//! Every table rejects unknown keys (`deny_unknown_fields`). Relative paths
+//! (mesh file, output folder) are resolved against the model file's folder.
+//! Syntax and schema errors report the line and column of the offending key.
+//! See `README-model.md` for the documented keys and a complete example.
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use crate::error::{FemError, Result};
+
+/// A whole model file.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Model {
+    /// Mesh input.
+    pub mesh: MeshDef,
+    /// Materials.
+    #[serde(default, rename = "material")]
+    pub materials: Vec<MaterialDef>,
+    /// Bodies: a volume group with a material.
+    #[serde(default, rename = "body")]
+    pub bodies: Vec<BodyDef>,
+    /// Supports and prescribed displacements.
+    #[serde(default, rename = "boundary")]
+    pub boundaries: Vec<BoundaryDef>,
+    /// Forces and pressures.
+    #[serde(default, rename = "load")]
+    pub loads: Vec<LoadDef>,
+    /// Analysis steps, run in order.
+    #[serde(default, rename = "step")]
+    pub steps: Vec<StepDef>,
+    /// Result files.
+    #[serde(default)]
+    pub output: OutputDef,
+    /// Folder of the model file (set by [`Model::load`]).
+    #[serde(skip)]
+    pub base_dir: PathBuf,
+}
+
+/// `[mesh]`.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MeshDef {
+    /// Gmsh 4.1 file, relative to the model file.
+    pub file: PathBuf,
+}
+
+/// Constitutive model keyword.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum MaterialKind {
+    /// Linear elastic (Saint-Venant–Kirchhoff when `nlgeom`).
+    LinearElastic,
+    /// Compressible neo-Hookean.
+    NeoHooke,
+}
+
+/// `[[material]]`.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialDef {
+    /// Name referenced by bodies.
+    pub name: String,
+    /// Law.
+    #[serde(rename = "type")]
+    pub kind: MaterialKind,
+    /// Young's modulus (`E`, alias `youngs_modulus`).
+    #[serde(rename = "E", alias = "youngs_modulus")]
+    pub e: f64,
+    /// Poisson's ratio (`nu`, alias `poisson_ratio`).
+    #[serde(alias = "poisson_ratio")]
+    pub nu: f64,
+}
+
+/// `[[body]]`.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BodyDef {
+    /// 3D physical group.
+    pub group: String,
+    /// Material name.
+    pub material: String,
+}
+
+/// A displacement component.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum Component {
+    /// x.
+    X,
+    /// y.
+    Y,
+    /// z.
+    Z,
+}
+
+impl Component {
+    /// 0, 1 or 2.
+    #[must_use]
+    pub fn index(self) -> usize {
+        match self {
+            Self::X => 0,
+            Self::Y => 1,
+            Self::Z => 2,
+        }
+    }
+}
+
+/// Prescribed displacement components (any subset).
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Displacement {
+    /// x component.
+    pub x: Option<f64>,
+    /// y component.
+    pub y: Option<f64>,
+    /// z component.
+    pub z: Option<f64>,
+}
+
+/// `[[boundary]]`.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BoundaryDef {
+    /// Group of any dimension (its nodes).
+    pub group: String,
+    /// Components held at zero.
+    #[serde(default)]
+    pub fix: Vec<Component>,
+    /// Components prescribed to reach these values at the end of the step.
+    pub displacement: Option<Displacement>,
+    /// Names of the steps in which it is active (default: all).
+    pub steps: Option<Vec<String>>,
+}
+
+/// `[[load]]`.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LoadDef {
+    /// Group: a node group for `force`, a 2D group for `pressure`.
+    pub group: String,
+    /// Total force vector applied to the group.
+    pub force: Option<[f64; 3]>,
+    /// Pressure (positive pushes into the body), dead load on the reference surface.
+    pub pressure: Option<f64>,
+    /// Pressure follows the deformed surface in `nlgeom` steps.
+    #[serde(default)]
+    pub follower: bool,
+    /// Names of the steps in which it is active (default: all).
+    pub steps: Option<Vec<String>>,
+}
+
+/// `[[step]]`.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct StepDef {
+    /// Name (default `step-<n>`).
+    pub name: Option<String>,
+    /// Number of equal increments initially tried.
+    #[serde(default = "default_increments")]
+    pub increments: usize,
+    /// Newton iterations allowed per increment.
+    #[serde(default = "default_max_iterations")]
+    pub max_iterations: usize,
+    /// Relative residual tolerance.
+    #[serde(default = "default_tol")]
+    pub residual_tolerance: f64,
+    /// Relative displacement-correction tolerance.
+    #[serde(default = "default_tol")]
+    pub displacement_tolerance: f64,
+    /// Geometric nonlinearity (total-Lagrangian finite strain).
+    #[serde(default)]
+    pub nlgeom: bool,
+    /// How many times an increment may be halved.
+    #[serde(default = "default_cutbacks")]
+    pub max_cutbacks: usize,
+}
+
+fn default_increments() -> usize {
+    1
+}
+fn default_max_iterations() -> usize {
+    20
+}
+fn default_tol() -> f64 {
+    1e-8
+}
+fn default_cutbacks() -> usize {
+    5
+}
+
+/// `[output]`.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct OutputDef {
+    /// Result folder, relative to the model file.
+    #[serde(default = "default_folder")]
+    pub folder: PathBuf,
+    /// Write a `.vtu` per converged increment and the `.pvd` collection.
+    #[serde(default = "yes")]
+    pub vtu: bool,
+    /// Write `history.csv`.
+    #[serde(default = "yes")]
+    pub history: bool,
+    /// Write a `.vtu` every `every`-th increment (the last of each step always).
+    #[serde(default = "one")]
+    pub every: usize,
+}
+
+fn default_folder() -> PathBuf {
+    PathBuf::from("results")
+}
+fn yes() -> bool {
+    true
+}
+fn one() -> usize {
+    1
+}
+
+impl Default for OutputDef {
+    fn default() -> Self {
+        Self {
+            folder: default_folder(),
+            vtu: true,
+            history: true,
+            every: 1,
+        }
+    }
+}
+
+impl Model {
+    /// Reads and parses a model file.
+    ///
+    /// # Errors
+    /// I/O error, or a syntax/schema error with line and column.
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| FemError::io(path, e))?;
+        let mut model = Self::parse(&text, path)?;
+        model.base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        Ok(model)
+    }
+
+    /// Parses model text (`path` only for messages).
+    ///
+    /// # Errors
+    /// A syntax/schema error with line and column.
+    pub fn parse(text: &str, path: &Path) -> Result<Self> {
+        toml::from_str(text).map_err(|e| {
+            let message = e.message().trim().replace('\n', " ");
+            let at = e
+                .span()
+                .map(|s| {
+                    let (line, col) = line_col(text, s.start);
+                    format!("line {line}, column {col}: ")
+                })
+                .unwrap_or_default();
+            FemError::ModelSyntax {
+                path: path.to_path_buf(),
+                message: format!("{at}{message}"),
+            }
+        })
+    }
+
+    /// The mesh path resolved against the model folder.
+    #[must_use]
+    pub fn mesh_path(&self) -> PathBuf {
+        self.base_dir.join(&self.mesh.file)
+    }
+
+    /// The output folder resolved against the model folder.
+    #[must_use]
+    pub fn output_dir(&self) -> PathBuf {
+        self.base_dir.join(&self.output.folder)
+    }
+
+    /// Step name (given or `step-<n>`, 1-based).
+    #[must_use]
+    pub fn step_name(&self, index: usize) -> String {
+        self.steps[index]
+            .name
+            .clone()
+            .unwrap_or_else(|| format!("step-{}", index + 1))
+    }
+}
+
+/// 1-based line and column of a byte offset.
+#[must_use]
+pub fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, col)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const GOOD: &str = r#"
+[mesh]
+file = "m.msh"
+[[material]]
+name = "steel"
+type = "linear_elastic"
+E = 210e3
+nu = 0.3
+[[body]]
+group = "solid"
+material = "steel"
+[[boundary]]
+group = "left"
+fix = ["x", "y", "z"]
+[[boundary]]
+group = "right"
+displacement = { x = 0.5 }
+[[load]]
+group = "top"
+pressure = 2.0
+[[step]]
+increments = 4
+nlgeom = true
+"#;
+
+    #[test]
+    fn parses_with_defaults() {
+        let m = Model::parse(GOOD, Path::new("m.toml")).expect("valid");
+        assert_eq!(m.materials[0].kind, MaterialKind::LinearElastic);
+        assert_eq!(
+            m.boundaries[0].fix,
+            vec![Component::X, Component::Y, Component::Z]
+        );
+        assert_eq!(
+            m.boundaries[1].displacement.as_ref().and_then(|d| d.x),
+            Some(0.5)
+        );
+        assert_eq!(m.steps[0].max_iterations, 20);
+        assert!(m.steps[0].nlgeom);
+        assert!(m.output.vtu);
+        assert_eq!(m.step_name(0), "step-1");
+    }
+
+    #[test]
+    fn long_material_key_names_are_accepted() {
+        let text = GOOD
+            .replace("E = 210e3", "youngs_modulus = 7e4")
+            .replace("nu = 0.3", "poisson_ratio = 0.33");
+        let m = Model::parse(&text, Path::new("m.toml")).expect("valid");
+        assert_eq!((m.materials[0].e, m.materials[0].nu), (7e4, 0.33));
+    }
+
+    #[test]
+    fn unknown_key_is_an_error_with_position() {
+        let bad = GOOD.replace("increments = 4", "incremnets = 4");
+        let e = Model::parse(&bad, Path::new("m.toml")).expect_err("unknown key");
+        let msg = e.to_string();
+        assert!(msg.contains("incremnets"), "{msg}");
+        assert!(msg.contains("line 22, column 1"), "{msg}");
+    }
+
+    #[test]
+    fn malformed_toml_points_at_line_and_column() {
+        let bad = "[mesh]\nfile = \"a.msh\"\n[[material]\nname = 1\n";
+        let e = Model::parse(bad, Path::new("m.toml")).expect_err("syntax");
+        let msg = e.to_string();
+        assert!(msg.contains("line 3, column"), "{msg}");
+        assert!(!msg.contains('\n'));
+    }
+}

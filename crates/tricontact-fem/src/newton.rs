@@ -1,0 +1,264 @@
+//! Newton–Raphson solution of one load increment.
+//!
+//! Unknowns: free DOFs (and extra unknowns); prescribed DOFs move from their
+//! committed values to the increment's targets `u_p`. Iteration 0 is the
+//! linearised predictor `K_ff Δu_f = −(r_f + K_fp Δu_p)` assembled at the
+//! committed state; then `K_ff δu = −r_f(u)` until convergence. In
+//! small-strain steps (constant tangent) the factorization is computed once
+//! per step and reused by every iteration and increment.
+//!
+//! Convergence (both must hold), with `r_ref = max(‖r⁰‖, ‖f_ext,f‖, ‖R‖)`
+//! (`R` the reactions) and `Δu = u − u_committed`:
+//! * `‖r_f‖ ≤ tol_r · r_ref`;
+//! * `‖δu_last‖ · min(1, ‖r_f^k‖/‖r_f^{k−1}‖) ≤ tol_u · max(‖Δu‖, 10⁻³‖u‖)`
+//!   — the last correction scaled by the observed contraction, an estimate
+//!   of the next one (so a linear problem converges after one solve); the
+//!   floor `10⁻³‖u‖` keeps increments that change nothing from stalling.
+//!
+//! Failure (triggers a cutback in [`crate::driver`]): no convergence within
+//! `max_iterations`, a non-finite or exploding residual (> 1e6 `r_ref`), an
+//! inverted element, or a singular tangent.
+
+use crate::analysis::{Analysis, Step};
+use crate::assembly::{DofMap, ExtraTerms, NO_EQ, Pattern, assemble};
+use crate::follower;
+use crate::linsolve::LinearSolver;
+
+/// A converged increment.
+#[derive(Clone, Debug)]
+pub struct Converged {
+    /// Displacements (and extra unknowns), global DOFs.
+    pub u: Vec<f64>,
+    /// `r = f_int − f_ext (+ extra)` over all global DOFs at `u`.
+    pub residual: Vec<f64>,
+    /// Residual norms over free equations: predictor, then each iteration.
+    pub residuals: Vec<f64>,
+    /// Reference norm used for the relative test.
+    pub reference: f64,
+    /// Linear solves performed.
+    pub iterations: usize,
+    /// Last factorization method.
+    pub method: &'static str,
+}
+
+/// Why an increment failed.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Failure {
+    /// Not converged or diverging.
+    Diverged(String),
+    /// Body element (Gmsh tag) with `det F ≤ 0`.
+    Inverted(u64),
+    /// Singular tangent.
+    Singular(String),
+}
+
+impl std::fmt::Display for Failure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Diverged(s) => write!(f, "{s}"),
+            Self::Inverted(t) => write!(f, "element {t} inverted (det F ≤ 0)"),
+            Self::Singular(s) => write!(f, "singular tangent: {s}"),
+        }
+    }
+}
+
+fn norm(v: impl Iterator<Item = f64>) -> f64 {
+    v.map(|x| x * x).sum::<f64>().sqrt()
+}
+
+/// Inputs fixed during an increment.
+pub struct IncrementProblem<'a> {
+    /// Analysis.
+    pub an: &'a Analysis,
+    /// Equation numbering.
+    pub dm: &'a DofMap,
+    /// Sparsity pattern.
+    pub pat: &'a Pattern,
+    /// Extra terms.
+    pub extra: &'a dyn ExtraTerms,
+    /// Step controls.
+    pub step: &'a Step,
+    /// External forces over global DOFs at the increment's end.
+    pub fext: &'a [f64],
+    /// Prescribed DOFs and their values at the increment's end.
+    pub prescribed: &'a [(usize, f64)],
+    /// Follower pressures `(load index, pressure)` at the increment's end.
+    pub follower: &'a [(usize, f64)],
+}
+
+/// Solves one increment starting from the committed `u0`.
+///
+/// # Errors
+/// A [`Failure`]; the caller keeps its committed state.
+pub fn solve_increment(
+    p: &IncrementProblem<'_>,
+    u0: &[f64],
+    solver: &mut LinearSolver,
+) -> Result<Converged, Failure> {
+    let (an, dm) = (p.an, p.dm);
+    let nlgeom = p.step.nlgeom;
+    let symmetric = p.extra.symmetric() && p.follower.is_empty();
+    let reuse = p.extra.num_extra() == 0;
+    let mut u = u0.to_vec();
+    let mut dup = vec![0.0; u.len()];
+    for &(dof, v) in p.prescribed {
+        dup[dof] = v - u0[dof];
+    }
+    let fext_norm = norm(
+        (0..dm.eq.len())
+            .filter(|&d| dm.eq[d] != NO_EQ)
+            .map(|d| p.fext[d]),
+    );
+    let inverted = |e: usize| Failure::Inverted(an.mesh.elements[an.body[e].element].tag);
+
+    let mut residuals = Vec::new();
+    let mut reference = fext_norm;
+    let mut du_norm = 0.0;
+    let mut method = "none";
+    let mut iterations = 0usize;
+    let mut predictor = true;
+    // Small strain without extra or follower terms: the tangent is constant,
+    // so the prescribed values are applied directly (the residual then
+    // contains `K_fp Δu_p` exactly) and one factorization serves the step.
+    let constant_tangent = !nlgeom && p.extra.num_extra() == 0 && p.follower.is_empty();
+    if constant_tangent {
+        for &(dof, v) in p.prescribed {
+            u[dof] = v;
+        }
+        dup.fill(0.0);
+    }
+    loop {
+        let need_tangent = !(constant_tangent && solver.cached.is_some());
+        let asm = assemble(
+            an,
+            dm,
+            p.pat,
+            &u,
+            nlgeom,
+            need_tangent,
+            (predictor && !constant_tangent).then_some(dup.as_slice()),
+            p.extra,
+        )
+        .map_err(|e| inverted(e.0))?;
+        let mut asm = asm;
+        if !p.follower.is_empty() {
+            let mut trip = Vec::new();
+            for &(li, pressure) in p.follower {
+                if let Some((_, faces)) = &an.loads[li].follower {
+                    follower::pressure_terms(
+                        &an.mesh,
+                        faces,
+                        pressure,
+                        &u,
+                        &mut asm.residual,
+                        Some(&mut trip),
+                    );
+                }
+            }
+            for (r, c, v) in trip {
+                let (er, ec) = (dm.eq[r], dm.eq[c]);
+                if er != NO_EQ && ec != NO_EQ {
+                    asm.extra.push(faer::sparse::Triplet::new(er, ec, v));
+                }
+            }
+        }
+        let mut r = asm.residual.clone();
+        for (ri, fi) in r.iter_mut().zip(p.fext) {
+            *ri -= fi;
+        }
+        let mut rhs = vec![0.0; dm.n_eq];
+        for (dof, &e) in dm.eq.iter().enumerate() {
+            if e != NO_EQ {
+                rhs[e] = -r[dof];
+            }
+        }
+        let rnorm = norm(rhs.iter().copied());
+        if predictor {
+            for (b, q) in rhs.iter_mut().zip(&asm.predictor) {
+                *b += q;
+            }
+        }
+        let react = norm((0..dm.n_nodal).filter(|&d| dm.eq[d] == NO_EQ).map(|d| r[d]));
+        let current = norm(rhs.iter().copied());
+        if !current.is_finite() {
+            return Err(Failure::Diverged("non-finite residual".into()));
+        }
+        residuals.push(current);
+        reference = reference.max(react).max(residuals[0]);
+        if !predictor {
+            let prev = residuals[residuals.len() - 2];
+            let ratio = if prev > 0.0 {
+                (rnorm / prev).min(1.0)
+            } else {
+                0.0
+            };
+            let du_total =
+                norm(u.iter().zip(u0).map(|(a, b)| a - b)).max(1e-3 * norm(u.iter().copied()));
+            if rnorm <= p.step.residual_tolerance * reference
+                && du_norm * ratio <= p.step.displacement_tolerance * du_total
+            {
+                return Ok(Converged {
+                    u,
+                    residual: r,
+                    residuals,
+                    reference,
+                    iterations,
+                    method,
+                });
+            }
+            if rnorm > 1e6 * reference {
+                return Err(Failure::Diverged(format!(
+                    "residual grew to {rnorm:.3e} (reference {reference:.3e})"
+                )));
+            }
+            if iterations >= p.step.max_iterations {
+                return Err(Failure::Diverged(format!(
+                    "no convergence in {} iterations (relative residual {:.3e})",
+                    iterations,
+                    rnorm / reference
+                )));
+            }
+        } else if current == 0.0 && dup.iter().all(|&d| d == 0.0) {
+            return Ok(Converged {
+                u,
+                residual: r,
+                residuals,
+                reference,
+                iterations,
+                method,
+            });
+        }
+        if !reuse {
+            solver.reset();
+        }
+        if need_tangent {
+            let k = asm.matrix(p.pat);
+            let factor = solver
+                .factor(k.as_ref(), symmetric)
+                .map_err(|s| Failure::Singular(s.0))?;
+            solver.cached = Some(factor);
+        }
+        let factor = solver.cached.as_ref().expect("factored above");
+        method = factor.method();
+        let du = factor.solve(&rhs);
+        if !constant_tangent {
+            solver.cached = None;
+        }
+        if du.iter().any(|v| !v.is_finite()) {
+            return Err(Failure::Singular("non-finite solution".into()));
+        }
+        for (dof, &e) in dm.eq.iter().enumerate() {
+            if e != NO_EQ {
+                u[dof] += du[e];
+            }
+        }
+        du_norm = norm(du.iter().copied());
+        if predictor {
+            for &(dof, v) in p.prescribed {
+                u[dof] = v;
+            }
+            predictor = false;
+        }
+        iterations += 1;
+    }
+}

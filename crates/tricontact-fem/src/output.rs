@@ -1,0 +1,203 @@
+//! Result files of a run, all written atomically (see [`crate::atomic`]):
+//!
+//! * `<stem>_<step>_<increment>.vtu` per converged increment (every
+//!   `output.every`-th and the last of each step): point data
+//!   `displacement`, `reaction`, `stress` (nodal average of element Cauchy
+//!   stress), `von_mises`; cell data `stress`, `von_mises`, `material`;
+//! * `<stem>.pvd`: the collection, `timestep` = step index + load factor,
+//!   rewritten after each `.vtu` so ParaView can open a running job;
+//! * `history.csv`: one row per converged increment: step, name, increment,
+//!   load factor, time, iterations, final residual norm and relative
+//!   residual, then `Rx, Ry, Rz` summed over each boundary group.
+//!
+//! `.vtu` files of an earlier run of the same model in the folder are
+//! removed first, so the folder always matches the `.pvd`.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use crate::analysis::Analysis;
+use crate::atomic::write_atomic;
+use crate::driver::IncrementInfo;
+use crate::error::{FemError, Result};
+use crate::results::{boundary_reactions, stress_fields};
+use crate::vtu::{Field, Grid, pvd_string, vtk_cell, vtu_string};
+
+/// Removes `.vtu` files of an earlier run of the same model
+/// (`<stem>_<3 digits>_<4 digits>.vtu`), so the folder matches the new `.pvd`.
+fn remove_stale(dir: &Path, stem: &str) -> Result<()> {
+    let entries = std::fs::read_dir(dir).map_err(|e| FemError::io(dir, e))?;
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let Some(rest) = name.strip_prefix(stem).and_then(|r| r.strip_prefix('_')) else {
+            continue;
+        };
+        let Some(core) = rest.strip_suffix(".vtu") else {
+            continue;
+        };
+        let parts: Vec<&str> = core.split('_').collect();
+        let numeric = |s: &str, n: usize| s.len() == n && s.bytes().all(|b| b.is_ascii_digit());
+        if parts.len() == 2 && numeric(parts[0], 3) && numeric(parts[1], 4) {
+            std::fs::remove_file(entry.path()).map_err(|e| FemError::io(entry.path(), e))?;
+        }
+    }
+    Ok(())
+}
+
+/// Writes the result files of one run.
+#[derive(Debug)]
+pub struct ResultWriter {
+    dir: PathBuf,
+    stem: String,
+    cells: Vec<(u8, Vec<usize>)>,
+    pvd: Vec<(f64, String)>,
+    history: String,
+    /// Paths written so far.
+    pub written: Vec<PathBuf>,
+}
+
+impl ResultWriter {
+    /// Creates the folder and the history header.
+    ///
+    /// # Errors
+    /// When the folder cannot be created.
+    pub fn new(an: &Analysis, dir: &Path, stem: &str) -> Result<Self> {
+        std::fs::create_dir_all(dir).map_err(|e| FemError::io(dir, e))?;
+        remove_stale(dir, stem)?;
+        let cells = an
+            .body
+            .iter()
+            .map(|b| {
+                let el = &an.mesh.elements[b.element];
+                vtk_cell(el.kind, &el.nodes)
+            })
+            .collect();
+        let mut history = String::from(
+            "step,step_name,increment,load_factor,time,iterations,residual,relative_residual",
+        );
+        for (i, b) in an.boundaries.iter().enumerate() {
+            // Two boundaries on one group get distinct columns: `name`, `name#2`, …
+            let same = an.boundaries[..i]
+                .iter()
+                .filter(|o| o.name == b.name)
+                .count();
+            let name = if same == 0 {
+                b.name.clone()
+            } else {
+                format!("{}#{}", b.name, same + 1)
+            };
+            let _ = write!(history, ",{0}_Rx,{0}_Ry,{0}_Rz", name);
+        }
+        history.push('\n');
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            stem: stem.to_string(),
+            cells,
+            pvd: Vec::new(),
+            history,
+            written: Vec::new(),
+        })
+    }
+
+    /// Records one converged increment.
+    ///
+    /// # Errors
+    /// I/O errors.
+    pub fn write(&mut self, an: &Analysis, info: &IncrementInfo<'_>) -> Result<()> {
+        let last = info.residuals.last().copied().unwrap_or(0.0);
+        let _ = write!(
+            self.history,
+            "{},{},{},{},{},{},{:e},{:e}",
+            info.step + 1,
+            info.step_name,
+            info.increment,
+            info.load_factor,
+            info.time,
+            info.iterations,
+            last,
+            if info.reference > 0.0 {
+                last / info.reference
+            } else {
+                0.0
+            }
+        );
+        for r in boundary_reactions(an, info.reactions) {
+            let _ = write!(self.history, ",{:e},{:e},{:e}", r[0], r[1], r[2]);
+        }
+        self.history.push('\n');
+        if an.output.history {
+            let p = self.dir.join("history.csv");
+            write_atomic(&p, self.history.as_bytes())?;
+            if !self.written.contains(&p) {
+                self.written.push(p);
+            }
+        }
+        let every = an.output.every.max(1);
+        if an.output.vtu && (info.increment.is_multiple_of(every) || info.load_factor >= 1.0) {
+            let name = format!(
+                "{}_{:03}_{:04}.vtu",
+                self.stem,
+                info.step + 1,
+                info.increment
+            );
+            let n = an.mesh.nodes.len();
+            let fields = stress_fields(an, info.u, info.nlgeom);
+            let material: Vec<f64> = an.body.iter().map(|b| b.material as f64).collect();
+            let grid = Grid {
+                points: &an.mesh.nodes,
+                cells: &self.cells,
+                point_data: vec![
+                    Field {
+                        name: "displacement",
+                        components: 3,
+                        values: &info.u[..3 * n],
+                    },
+                    Field {
+                        name: "reaction",
+                        components: 3,
+                        values: &info.reactions[..3 * n],
+                    },
+                    Field {
+                        name: "stress",
+                        components: 6,
+                        values: &fields.point_stress,
+                    },
+                    Field {
+                        name: "von_mises",
+                        components: 1,
+                        values: &fields.point_von_mises,
+                    },
+                ],
+                cell_data: vec![
+                    Field {
+                        name: "stress",
+                        components: 6,
+                        values: &fields.cell_stress,
+                    },
+                    Field {
+                        name: "von_mises",
+                        components: 1,
+                        values: &fields.cell_von_mises,
+                    },
+                    Field {
+                        name: "material",
+                        components: 1,
+                        values: &material,
+                    },
+                ],
+            };
+            let xml = vtu_string(&grid).map_err(|e| FemError::Output(e.to_string()))?;
+            let path = self.dir.join(&name);
+            write_atomic(&path, xml.as_bytes())?;
+            self.written.push(path);
+            self.pvd.push((info.time, name));
+            let pvd = pvd_string(&self.pvd).map_err(|e| FemError::Output(e.to_string()))?;
+            let p = self.dir.join(format!("{}.pvd", self.stem));
+            write_atomic(&p, pvd.as_bytes())?;
+            if !self.written.contains(&p) {
+                self.written.push(p);
+            }
+        }
+        Ok(())
+    }
+}

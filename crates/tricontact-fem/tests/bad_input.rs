@@ -1,0 +1,196 @@
+//! Every kind of bad input gives its own clear error, never a panic or a
+//! NaN result: malformed TOML, unknown group, missing mesh file,
+//! unsupported element type, unsupported body, inverted and zero-volume
+//! elements.
+#![allow(clippy::needless_range_loop)]
+
+use std::path::{Path, PathBuf};
+
+use tricontact_fem::assembly::NoExtra;
+use tricontact_fem::{FemError, analysis::Analysis, driver, gmsh, load_analysis, model::Model};
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("tricontact-bad-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).expect("temp dir");
+    d
+}
+
+/// A one-element Gmsh 4.1 ASCII mesh: physical volume "solid" (tag 1) and
+/// physical surface "base" (tag 2, empty).
+fn msh(element_type: u32, nodes: &[[f64; 3]]) -> String {
+    let mut s = String::from(
+        "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n2 2 \"base\"\n3 1 \"solid\"\n$EndPhysicalNames\n$Entities\n0 0 1 1\n1 0 0 0 1 1 0 1 2 0\n1 0 0 0 1 1 1 1 1 0\n$EndEntities\n",
+    );
+    let n = nodes.len();
+    s += &format!("$Nodes\n1 {n} 1 {n}\n3 1 0 {n}\n");
+    for i in 1..=n {
+        s += &format!("{i}\n");
+    }
+    for p in nodes {
+        s += &format!("{} {} {}\n", p[0], p[1], p[2]);
+    }
+    s += &format!("$EndNodes\n$Elements\n1 1 1 1\n3 1 {element_type} 1\n1");
+    for i in 1..=n {
+        s += &format!(" {i}");
+    }
+    s += "\n$EndElements\n";
+    s
+}
+
+const TET: [[f64; 3]; 4] = [
+    [0.0, 0.0, 0.0],
+    [1.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0],
+    [0.0, 0.0, 1.0],
+];
+
+fn model_text(body_group: &str, extra: &str) -> String {
+    format!(
+        "[mesh]\nfile = \"m.msh\"\n[[material]]\nname = \"m\"\ntype = \"linear_elastic\"\nE = 1.0\nnu = 0.3\n[[body]]\ngroup = \"{body_group}\"\nmaterial = \"m\"\n{extra}[[step]]\n"
+    )
+}
+
+fn setup(name: &str, mesh: &str, model: &str) -> PathBuf {
+    let d = temp_dir(name);
+    std::fs::write(d.join("m.msh"), mesh).expect("write mesh");
+    std::fs::write(d.join("model.toml"), model).expect("write model");
+    d.join("model.toml")
+}
+
+#[test]
+fn malformed_toml_reports_line_and_column() {
+    let p = setup(
+        "toml",
+        &msh(4, &TET),
+        "[mesh]\nfile = \"m.msh\"\n\n[[material]\nname = \"x\"\n",
+    );
+    let e = Model::load(&p).expect_err("malformed");
+    let msg = e.to_string();
+    assert!(matches!(e, FemError::ModelSyntax { .. }));
+    assert!(msg.contains("line 4, column"), "{msg}");
+    // Wrong value type, with position too.
+    let p = setup(
+        "toml2",
+        &msh(4, &TET),
+        &model_text("solid", "").replace("E = 1.0", "E = \"stiff\""),
+    );
+    let msg = Model::load(&p).expect_err("type").to_string();
+    assert!(msg.contains("line 6, column 5"), "{msg}");
+}
+
+#[test]
+fn unknown_group_lists_the_existing_groups() {
+    let p = setup("group", &msh(4, &TET), &model_text("solidd", ""));
+    let e = load_analysis(&p).expect_err("unknown group");
+    let msg = e.to_string();
+    assert!(matches!(e, FemError::UnknownGroup { .. }), "{msg}");
+    assert!(
+        msg.contains("'solidd'") && msg.contains("solid (3D)") && msg.contains("base (2D)"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn missing_mesh_file_names_the_path() {
+    let d = temp_dir("missing");
+    let p = d.join("model.toml");
+    std::fs::write(&p, model_text("solid", "").replace("m.msh", "nowhere.msh")).expect("write");
+    let e = load_analysis(&p).expect_err("missing mesh");
+    assert!(matches!(e, FemError::Io { .. }));
+    assert!(e.to_string().contains("nowhere.msh"), "{e}");
+}
+
+#[test]
+fn unsupported_element_type_is_named() {
+    let prism = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [1.0, 0.0, 1.0],
+        [0.0, 1.0, 1.0],
+    ];
+    let e = gmsh::parse_msh(msh(6, &prism).as_bytes(), Path::new("p.msh")).expect_err("prism");
+    assert!(matches!(e, FemError::UnsupportedElement { .. }));
+    assert!(
+        e.to_string().contains("Pri6") && e.to_string().contains("solid"),
+        "{e}"
+    );
+}
+
+#[test]
+fn body_without_supports_is_reported_singular() {
+    let p = setup("free", &msh(4, &TET), &model_text("solid", ""));
+    let an: Analysis = load_analysis(&p).expect("valid model");
+    let e = driver::run(&an, &NoExtra, &mut |_| Ok(())).expect_err("singular");
+    assert!(matches!(e, FemError::Singular(_)), "{e}");
+    assert!(
+        e.to_string().contains("6 unconstrained rigid-body mode"),
+        "{e}"
+    );
+    // Partially supported: a single fixed node leaves the 3 rotations free.
+    let mesh = gmsh::parse_msh(msh(4, &TET).as_bytes(), Path::new("m.msh")).expect("mesh");
+    let mut an = Analysis::new(
+        &Model::parse(&model_text("solid", ""), Path::new("m.toml")).expect("model"),
+        mesh,
+    )
+    .expect("analysis");
+    an.boundaries.push(tricontact_fem::analysis::Boundary {
+        name: "pin".into(),
+        nodes: vec![0],
+        values: [Some(0.0); 3],
+        active: vec![true],
+    });
+    let e = driver::run(&an, &NoExtra, &mut |_| Ok(())).expect_err("singular");
+    assert!(
+        e.to_string().contains("3 unconstrained rigid-body mode"),
+        "{e}"
+    );
+}
+
+#[test]
+fn inverted_element_is_reported() {
+    let mut nodes = TET;
+    nodes.swap(1, 2);
+    let p = setup("inverted", &msh(4, &nodes), &model_text("solid", ""));
+    let e = load_analysis(&p).expect_err("inverted");
+    assert!(matches!(e, FemError::InvertedElement { tag: 1, .. }), "{e}");
+}
+
+#[test]
+fn zero_volume_element_is_reported() {
+    let mut nodes = TET;
+    nodes[3] = [0.5, 0.5, 0.0];
+    let p = setup("flat", &msh(4, &nodes), &model_text("solid", ""));
+    let e = load_analysis(&p).expect_err("flat");
+    assert!(matches!(e, FemError::ZeroVolume { tag: 1, .. }), "{e}");
+}
+
+#[test]
+fn several_problems_are_all_listed() {
+    let extra = "[[boundary]]\ngroup = \"nope\"\nfix = [\"x\"]\n[[load]]\ngroup = \"solid\"\npressure = 1.0\n";
+    let p = setup(
+        "many",
+        &msh(4, &TET),
+        &model_text("solid", extra).replace("nu = 0.3", "nu = 0.7"),
+    );
+    let e = load_analysis(&p).expect_err("invalid");
+    let msg = e.to_string();
+    assert!(
+        msg.contains("nu") && msg.contains("'nope'") && msg.contains("pressure needs a surface"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn old_msh_format_and_garbage_are_rejected_clearly() {
+    let old = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n";
+    let e = gmsh::parse_msh(old.as_bytes(), Path::new("old.msh")).expect_err("2.2");
+    assert!(e.to_string().contains("4.1"), "{e}");
+    let e = gmsh::parse_msh(b"hello", Path::new("x.msh")).expect_err("garbage");
+    assert!(e.to_string().contains("not a Gmsh mesh"), "{e}");
+    let truncated = &msh(4, &TET)[..200];
+    let e = gmsh::parse_msh(truncated.as_bytes(), Path::new("t.msh")).expect_err("truncated");
+    assert!(matches!(e, FemError::Mesh { .. }), "{e}");
+    assert!(!e.to_string().contains('\n'), "one line: {e}");
+}

@@ -1,0 +1,75 @@
+//! Shared helpers of the integration tests.
+#![allow(dead_code)]
+
+use std::path::Path;
+
+use tricontact_fem::analysis::{Analysis, Boundary};
+use tricontact_fem::assembly::NoExtra;
+use tricontact_fem::driver::{RunSummary, run};
+use tricontact_fem::mesh::Mesh;
+use tricontact_fem::model::Model;
+use tricontact_fem::results::boundary_reactions;
+
+/// Model text without the `[mesh]` table, resolved against `mesh`.
+pub fn analysis(mesh: Mesh, body: &str) -> Analysis {
+    let text = format!("[mesh]\nfile = \"unused.msh\"\n{body}");
+    let model = Model::parse(&text, Path::new("test.toml")).expect("valid model");
+    Analysis::new(&model, mesh).expect("valid analysis")
+}
+
+/// One converged increment as recorded by the tests.
+#[derive(Clone, Debug)]
+pub struct Record {
+    pub step: usize,
+    pub increment: usize,
+    pub load_factor: f64,
+    pub iterations: usize,
+    pub residuals: Vec<f64>,
+    pub reference: f64,
+    pub reactions: Vec<[f64; 3]>,
+    pub u: Vec<f64>,
+}
+
+/// Runs the analysis and records every increment.
+pub fn solve(an: &Analysis) -> (RunSummary, Vec<Record>) {
+    let mut records = Vec::new();
+    let summary = run(an, &NoExtra, &mut |info| {
+        records.push(Record {
+            step: info.step,
+            increment: info.increment,
+            load_factor: info.load_factor,
+            iterations: info.iterations,
+            residuals: info.residuals.to_vec(),
+            reference: info.reference,
+            reactions: boundary_reactions(an, info.reactions),
+            u: info.u.to_vec(),
+        });
+        Ok(())
+    })
+    .expect("run succeeds");
+    (summary, records)
+}
+
+/// Prescribes `u(X)` on every node of `nodes`, one boundary per node.
+pub fn prescribe_field(an: &mut Analysis, nodes: &[usize], field: impl Fn([f64; 3]) -> [f64; 3]) {
+    let n_steps = an.steps.len();
+    for &a in nodes {
+        let v = field(an.mesh.nodes[a]);
+        an.boundaries.push(Boundary {
+            name: format!("node{a}"),
+            nodes: vec![a],
+            values: [Some(v[0]), Some(v[1]), Some(v[2])],
+            active: vec![true; n_steps],
+        });
+    }
+}
+
+/// Nodes on the surface of the box `[0, size]`.
+pub fn box_boundary_nodes(mesh: &Mesh, size: [f64; 3]) -> Vec<usize> {
+    (0..mesh.nodes.len())
+        .filter(|&a| {
+            let p = mesh.nodes[a];
+            (0..3).any(|i| p[i].abs() < 1e-12 * size[i] || (p[i] - size[i]).abs() < 1e-12 * size[i])
+        })
+        .collect()
+}
