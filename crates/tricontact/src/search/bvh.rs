@@ -1,10 +1,11 @@
 //! A bounding-volume hierarchy over the facets of a surface (a linear BVH with child boxes).
 //!
 //! # Build
-//! 1. Each facet's box (its three nodes, inflated by the search distance `r`) and its validity
-//!    (non-degenerate, see [`crate::Facet::new`]) are computed in parallel.
-//! 2. Valid facets are sorted by the Morton code of their box centre (parallel sort; ties by facet
-//!    index, so the order is deterministic).
+//! 1. Each facet's centroid and validity (non-degenerate, see [`crate::Facet::new`]) are computed
+//!    in parallel.
+//! 2. Valid facets are sorted by the Morton code of their centroid (parallel sort; ties by facet
+//!    index, so the order is deterministic). Leaf boxes are the facets' boxes inflated by the
+//!    search distance `r`.
 //! 3. Each range of the sorted list is split where the highest Morton bit that differs across the
 //!    range changes (a binary search), so the two halves are the two halves of a Z-order cell and
 //!    their boxes barely overlap; a range of identical codes is split in the middle. Splitting
@@ -15,9 +16,9 @@
 //!    decides on both children at once. Leaves are not nodes: a child reference with the top bit
 //!    set names `count` facets from `order[first..]`. The top levels are built in parallel
 //!    (`rayon::join`), each half into its own list, then joined with child indices shifted.
-//! 5. Boxes are filled by one reverse sweep (children follow their parent), and the corner
-//!    positions of every facet are copied in leaf order, so a query reads a leaf's facets from one
-//!    contiguous block.
+//! 5. The corner positions of every facet are copied in leaf order, so a query reads a leaf's
+//!    facets from one contiguous block, and the boxes are filled bottom-up from those copies
+//!    (a parallel recursion over subtrees, which are contiguous runs of nodes).
 //!
 //! # Refit and rebuild
 //! When nodes move, [`Bvh::update`] recomputes facet boxes and sweeps the boxes again (a refit,
@@ -78,16 +79,6 @@ impl Node {
             lo: [[f32::INFINITY; 3]; 2],
             hi: [[f32::NEG_INFINITY; 3]; 2],
             child,
-        }
-    }
-
-    /// The box of child `k`, exactly as stored.
-    #[inline]
-    pub(crate) fn child_box(&self, k: usize) -> Aabb {
-        let v = |a: [f32; 3]| Vec3::new(f64::from(a[0]), f64::from(a[1]), f64::from(a[2]));
-        Aabb {
-            min: v(self.lo[k]),
-            max: v(self.hi[k]),
         }
     }
 
@@ -169,56 +160,59 @@ impl Bvh {
         inflation: f64,
     ) -> Result<Self, SurfaceError> {
         surface.check_positions(positions)?;
-        let (boxes, degenerate) = facet_boxes(surface, positions, inflation);
-        Ok(Self::from_boxes(
-            surface, positions, &boxes, degenerate, inflation,
+        let (centers, degenerate) = facet_centers(surface, positions);
+        Ok(Self::from_centers(
+            surface, positions, &centers, degenerate, inflation,
         ))
     }
 
-    fn from_boxes(
+    fn from_centers(
         surface: &Surface,
         positions: &[Vec3],
-        boxes: &[Aabb],
+        centers: &[Vec3],
         degenerate: Vec<bool>,
         inflation: f64,
     ) -> Self {
-        let bounds = boxes
+        let bounds = centers
             .par_iter()
             .zip(degenerate.par_iter())
             .filter(|(_, d)| !**d)
-            .map(|(b, _)| Aabb::EMPTY.union_point(&b.center()))
+            .map(|(c, _)| Aabb::EMPTY.union_point(c))
             .reduce(|| Aabb::EMPTY, |a, b| a.union(&b));
-        let mut keys: Vec<(u64, u32)> = boxes
+        let mut keys: Vec<(u64, u32)> = centers
             .par_iter()
             .enumerate()
             .filter(|(f, _)| !degenerate[*f])
-            .map(|(f, b)| (morton_code(&b.center(), &bounds), index(f)))
+            .map(|(f, c)| (morton_code(c, &bounds), index(f)))
             .collect();
         keys.par_sort_unstable();
         let (root, nodes) = layout(&keys, 0, keys.len());
-        let order: Vec<u32> = keys.into_iter().map(|(_, f)| f).collect();
+        let order: Vec<u32> = keys.into_par_iter().map(|(_, f)| f).collect();
         let mut slot = vec![NO_SLOT; surface.len()];
         for (s, &f) in order.iter().enumerate() {
             slot[f as usize] = index(s);
         }
+        let corners = order
+            .par_iter()
+            .with_min_len(4096)
+            .map(|&f| surface.corners(f, positions))
+            .collect();
         let mut bvh = Self {
             nodes,
             root,
             order,
-            corners: Vec::new(),
+            corners,
             slot,
             degenerate,
             inflation,
             built_area: 0.0,
         };
-        bvh.copy_corners(surface, positions);
-        bvh.built_area = bvh.sweep(boxes);
+        bvh.built_area = bvh.sweep();
         bvh
     }
 
     /// Copies the facets' corner positions into leaf order.
     fn copy_corners(&mut self, surface: &Surface, positions: &[Vec3]) {
-        self.corners.resize(self.order.len(), [Vec3::zeros(); 3]);
         self.corners
             .par_iter_mut()
             .zip(self.order.par_iter())
@@ -237,12 +231,14 @@ impl Bvh {
         positions: &[Vec3],
     ) -> Result<Update, SurfaceError> {
         surface.check_positions(positions)?;
-        let (boxes, degenerate) = facet_boxes(surface, positions, self.inflation);
-        if degenerate == self.degenerate && self.sweep(&boxes) <= REBUILD_RATIO * self.built_area {
+        let (centers, degenerate) = facet_centers(surface, positions);
+        if degenerate == self.degenerate {
             self.copy_corners(surface, positions);
-            return Ok(Update::Refit);
+            if self.sweep() <= REBUILD_RATIO * self.built_area {
+                return Ok(Update::Refit);
+            }
         }
-        *self = Self::from_boxes(surface, positions, &boxes, degenerate, self.inflation);
+        *self = Self::from_centers(surface, positions, &centers, degenerate, self.inflation);
         Ok(Update::Rebuilt)
     }
 
@@ -262,38 +258,72 @@ impl Bvh {
         self.nodes.len()
     }
 
-    /// Fills every child box bottom-up from the facet boxes; returns the refit-quality measure
-    /// (sum of the children's half-areas).
-    fn sweep(&mut self, boxes: &[Aabb]) -> f64 {
-        let mut area = 0.0;
-        for i in (0..self.nodes.len()).rev() {
-            for k in 0..2 {
-                let b = match as_leaf(self.nodes[i].child[k]) {
-                    Some((first, count)) => self.order[first..first + count]
-                        .iter()
-                        .fold(Aabb::EMPTY, |acc, &f| acc.union(&boxes[f as usize])),
-                    None => {
-                        let c = &self.nodes[self.nodes[i].child[k] as usize];
-                        c.child_box(0).union(&c.child_box(1))
-                    }
-                };
-                area += b.half_area();
-                self.nodes[i].set_child_box(k, &b);
-            }
-        }
-        area
+    /// Fills every child box bottom-up from the corner copies (leaf boxes inflated by the search
+    /// distance), in parallel over subtrees; returns the refit-quality measure (sum of the
+    /// children's half-areas).
+    fn sweep(&mut self) -> f64 {
+        let Self {
+            nodes,
+            root,
+            corners,
+            inflation,
+            ..
+        } = self;
+        sweep_subtree(nodes, 0, *root, corners, *inflation).1
     }
 }
 
-/// Boxes (inflated) and degeneracy of every facet at `positions`.
-fn facet_boxes(surface: &Surface, positions: &[Vec3], inflation: f64) -> (Vec<Aabb>, Vec<bool>) {
+/// The box of the leaf `corners[first..first + count]`.
+fn leaf_box(corners: &[[Vec3; 3]], first: usize, count: usize, inflation: f64) -> Aabb {
+    corners[first..first + count]
+        .iter()
+        .fold(Aabb::EMPTY, |acc, c| acc.union(&Aabb::of_points(c)))
+        .inflate(inflation)
+}
+
+/// Sweeps the subtree rooted at `child`, whose internal nodes are `nodes` (global indices from
+/// `base`, depth-first, so a subtree is a contiguous run); returns its box and area measure.
+fn sweep_subtree(
+    nodes: &mut [Node],
+    base: usize,
+    child: Child,
+    corners: &[[Vec3; 3]],
+    inflation: f64,
+) -> (Aabb, f64) {
+    if let Some((first, count)) = as_leaf(child) {
+        return (leaf_box(corners, first, count, inflation), 0.0);
+    }
+    debug_assert_eq!(child as usize, base);
+    let (head, rest) = nodes.split_at_mut(1);
+    let [left, right] = head[0].child;
+    // The left subtree runs up to the right child's index (if the right child is a node).
+    let split = as_leaf(right).map_or(right as usize - base - 1, |_| rest.len());
+    let (lnodes, rnodes) = rest.split_at_mut(split);
+    let (lbase, rbase) = (base + 1, base + 1 + split);
+    let ((lb, la), (rb, ra)) = if lnodes.len() + rnodes.len() > 4096 {
+        rayon::join(
+            || sweep_subtree(lnodes, lbase, left, corners, inflation),
+            || sweep_subtree(rnodes, rbase, right, corners, inflation),
+        )
+    } else {
+        (
+            sweep_subtree(lnodes, lbase, left, corners, inflation),
+            sweep_subtree(rnodes, rbase, right, corners, inflation),
+        )
+    };
+    head[0].set_child_box(0, &lb);
+    head[0].set_child_box(1, &rb);
+    (lb.union(&rb), la + ra + lb.half_area() + rb.half_area())
+}
+
+/// Centroid and degeneracy of every facet at `positions`.
+fn facet_centers(surface: &Surface, positions: &[Vec3]) -> (Vec<Vec3>, Vec<bool>) {
     (0..surface.len())
         .into_par_iter()
         .with_min_len(1024)
         .map(|f| {
             let [a, b, c] = surface.corners(index(f), positions);
-            let valid = Facet::new(a, b, c).is_ok();
-            (Aabb::of_points(&[a, b, c]).inflate(inflation), !valid)
+            ((a + b + c) / 3.0, Facet::new(a, b, c).is_err())
         })
         .unzip()
 }
