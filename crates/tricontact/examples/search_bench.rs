@@ -18,39 +18,18 @@ use parry3d_f64::math::Vector as PVec;
 use parry3d_f64::query::PointQuery;
 use parry3d_f64::shape::TriMesh;
 use tricontact::Vec3;
-use tricontact::search::scenes::torus;
+use tricontact::search::scenes::{self, torus};
 use tricontact::search::{Bvh, Hit, Query, Surface, Update, brute_force_closest};
 
-fn lcg(seed: u64) -> impl FnMut() -> f64 {
-    let mut s = seed;
-    move || {
-        s = s
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (s >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 fn near_surface(nodes: &[Vec3], facets: &[[u32; 3]], h: f64) -> Vec<Query> {
-    let mut r = lcg(11);
-    facets
-        .iter()
-        .map(|&[a, b, c]| {
-            let (a, b, c) = (nodes[a as usize], nodes[b as usize], nodes[c as usize]);
-            let (s, t) = (r(), r());
-            let (s, t) = if s + t > 1.0 {
-                (1.0 - s, 1.0 - t)
-            } else {
-                (s, t)
-            };
-            let n = (b - a).cross(&(c - a)).normalize();
-            Query::point(a + s * (b - a) + t * (c - a) + (4.0 * r() - 2.0) * h * n)
-        })
+    scenes::near_surface(nodes, facets, 2.0 * h, 11)
+        .into_iter()
+        .map(Query::point)
         .collect()
 }
 
 fn shuffled<T: Copy>(v: &[T]) -> Vec<T> {
-    let mut r = lcg(5);
+    let mut r = scenes::uniform(5);
     let mut out = v.to_vec();
     for i in (1..out.len()).rev() {
         #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]

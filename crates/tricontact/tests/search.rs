@@ -2,7 +2,7 @@
 //! vertices, degenerate facets, self-contact exclusion, refit/rebuild, incremental walk, threads.
 
 use proptest::prelude::*;
-use tricontact::search::scenes::{grid, torus};
+use tricontact::search::scenes::{self, grid, torus};
 use tricontact::search::{
     Bvh, Hit, Query, Surface, SurfaceError, Update, brute_force_closest, measure,
 };
@@ -23,13 +23,7 @@ fn same(a: Option<Hit>, b: Option<Hit>) -> Result<(), TestCaseError> {
 }
 
 fn lcg(seed: u64) -> impl FnMut() -> f64 {
-    let mut s = seed;
-    move || {
-        s = s
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (s >> 11) as f64 / (1u64 << 53) as f64
-    }
+    scenes::uniform(seed)
 }
 
 /// A triangle soup of `n` random facets in the unit cube (some nearly degenerate).
@@ -161,23 +155,11 @@ fn self_contact_never_pairs_a_node_with_its_own_facets() {
     }
 }
 
-/// Query points within ±2 element sizes of the torus surface, in facet order.
+/// Query points within ±2 element sizes `h` of the surface, in facet order.
 fn near_surface(nodes: &[Vec3], surface: &Surface, seed: u64, h: f64) -> Vec<Query> {
-    let mut r = lcg(seed);
-    surface
-        .facets()
-        .iter()
-        .map(|&[a, b, c]| {
-            let (a, b, c) = (nodes[a as usize], nodes[b as usize], nodes[c as usize]);
-            let (s, t) = (r(), r());
-            let (s, t) = if s + t > 1.0 {
-                (1.0 - s, 1.0 - t)
-            } else {
-                (s, t)
-            };
-            let n = (b - a).cross(&(c - a)).normalize();
-            Query::point(a + s * (b - a) + t * (c - a) + (4.0 * r() - 2.0) * h * n)
-        })
+    scenes::near_surface(nodes, surface.facets(), 2.0 * h, seed)
+        .into_iter()
+        .map(Query::point)
         .collect()
 }
 

@@ -54,3 +54,39 @@ pub fn grid(n: u32, h: f64) -> Mesh {
     }
     (nodes, facets)
 }
+
+/// A small deterministic generator of uniform numbers in `[0, 1)` (a 64-bit linear congruential
+/// generator), so scenes and query sets are reproducible without a random-number crate.
+pub fn uniform(seed: u64) -> impl FnMut() -> f64 {
+    let mut s = seed;
+    move || {
+        s = s
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        // The top 53 bits as a fraction: exact in f64.
+        #[allow(clippy::cast_precision_loss)]
+        let v = (s >> 11) as f64 / (1u64 << 53) as f64;
+        v
+    }
+}
+
+/// One point per facet, in facet order: a uniformly random point of the facet moved along the
+/// facet normal by a uniform offset in `[−spread, spread]` — query points near the surface.
+#[must_use]
+pub fn near_surface(nodes: &[Vec3], facets: &[[u32; 3]], spread: f64, seed: u64) -> Vec<Vec3> {
+    let mut r = uniform(seed);
+    facets
+        .iter()
+        .map(|&[a, b, c]| {
+            let (a, b, c) = (nodes[a as usize], nodes[b as usize], nodes[c as usize]);
+            let (s, t) = (r(), r());
+            let (s, t) = if s + t > 1.0 {
+                (1.0 - s, 1.0 - t)
+            } else {
+                (s, t)
+            };
+            let n = (b - a).cross(&(c - a)).normalize();
+            a + s * (b - a) + t * (c - a) + (2.0 * r() - 1.0) * spread * n
+        })
+        .collect()
+}
