@@ -22,13 +22,9 @@ fn same(a: Option<Hit>, b: Option<Hit>) -> Result<(), TestCaseError> {
     }
 }
 
-fn lcg(seed: u64) -> impl FnMut() -> f64 {
-    scenes::uniform(seed)
-}
-
 /// A triangle soup of `n` random facets in the unit cube (some nearly degenerate).
 fn soup(n: usize, seed: u64) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let mut r = lcg(seed);
+    let mut r = scenes::uniform(seed);
     let mut nodes = Vec::new();
     let mut facets = Vec::new();
     for f in 0..n {
@@ -50,7 +46,7 @@ proptest! {
         let (nodes, facets) = soup(n, seed);
         let surface = Surface::new(facets, nodes.len()).unwrap();
         let bvh = Bvh::build(&surface, &nodes, inflation).unwrap();
-        let mut r = lcg(seed ^ 0x5555);
+        let mut r = scenes::uniform(seed ^ 0x5555);
         for _ in 0..50 {
             let q = Query::point(Vec3::new(1.4 * r() - 0.2, 1.4 * r() - 0.2, 1.4 * r() - 0.2));
             for max in [f64::INFINITY, 0.05] {
