@@ -3,6 +3,7 @@
 //! * [`surface`]: facets as node triples, with facet adjacency;
 //! * [`aabb`], [`morton`]: boxes and Z-order codes;
 //! * [`bvh`]: the bounding-volume hierarchy (parallel build, refit, rebuild on degraded quality);
+//! * [`layout`]: its topology (Morton splits collapsed to four-wide nodes); `node`: its nodes;
 //! * [`query`]: closest facet and facets within a distance, parallel over nodes, deterministic;
 //! * [`incremental`]: the neighbourhood walk from last increment's facet, with tree fallback.
 //!
@@ -12,7 +13,9 @@
 pub mod aabb;
 pub mod bvh;
 pub mod incremental;
+pub mod layout;
 pub mod morton;
+pub(crate) mod node;
 pub mod query;
 pub mod scenes;
 pub mod surface;

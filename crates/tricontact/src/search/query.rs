@@ -23,8 +23,14 @@ use rayon::prelude::*;
 use crate::closest::{ClosestPoint, closest_point_on_triangle, distance_squared_to_triangle};
 use crate::facet::Facet;
 use crate::linalg::Vec3;
-use crate::search::bvh::{Bvh, as_leaf, index};
+use crate::search::bvh::{Bvh, index};
+use crate::search::node::as_leaf;
 use crate::search::surface::Surface;
+
+thread_local! {
+    /// The traversal stack of [`Bvh::closest`], kept per thread so a query allocates nothing.
+    static STACK: std::cell::RefCell<Vec<(u32, f64)>> = const { std::cell::RefCell::new(Vec::new()) };
+}
 
 /// Relative margin on squared distances below which a box is never pruned.
 const TIE_MARGIN: f64 = 1.0 + 1e-12;
@@ -147,45 +153,43 @@ impl Bvh {
     ) -> Option<Candidate> {
         let p = &q.point;
         let mut best = seed.filter(|c| c.d2 <= max2);
-        // (child reference, squared distance to its box); depth ≤ 63 Morton bits + log₂ of the
-        // longest run of equal codes, so 128 entries suffice.
-        let mut stack = [(self.root, 0.0f64); 128];
-        let mut top = 1usize;
-        while top > 0 {
-            top -= 1;
-            let (child, d2_box) = stack[top];
-            if d2_box > Candidate::bound(&best, max2) {
-                continue;
-            }
-            if let Some((first, count)) = as_leaf(child) {
-                for s in first..first + count {
-                    let facet = self.order[s];
-                    if q.excludes(surface, facet) {
-                        continue;
-                    }
-                    let c = &self.corners[s];
-                    let d2 = distance_squared_to_triangle(&c[0], &c[1], &c[2], p);
-                    Candidate::offer(&mut best, d2, facet, c, max2);
+        // (child reference, squared distance to its box), in a per-thread buffer reused from query
+        // to query.
+        STACK.with_borrow_mut(|stack| {
+            stack.clear();
+            stack.push((self.root, 0.0f64));
+            while let Some((child, d2_box)) = stack.pop() {
+                if d2_box > Candidate::bound(&best, max2) {
+                    continue;
                 }
-                continue;
+                if let Some((first, count)) = as_leaf(child) {
+                    for s in first..first + count {
+                        let facet = self.order[s];
+                        if q.excludes(surface, facet) {
+                            continue;
+                        }
+                        let c = &self.corners[s];
+                        let d2 = distance_squared_to_triangle(&c[0], &c[1], &c[2], p);
+                        Candidate::offer(&mut best, d2, facet, c, max2);
+                    }
+                    continue;
+                }
+                let node = &self.nodes[child as usize];
+                let d = node.child_distances_squared(p);
+                let bound = Candidate::bound(&best, max2);
+                // Push the children within the bound with the nearest last, so it is popped next.
+                // Empty slots are infinitely far; an unbounded query must still skip them.
+                let nearest = nearest_slot(&d);
+                for k in (0..4)
+                    .filter(|&k| k != nearest)
+                    .chain(std::iter::once(nearest))
+                {
+                    if d[k] <= bound && d[k] < f64::INFINITY {
+                        stack.push((node.child[k], d[k]));
+                    }
+                }
             }
-            let node = &self.nodes[child as usize];
-            let [d0, d1] = node.child_distances_squared(p);
-            let (near, far) = if d0 <= d1 {
-                ((node.child[0], d0), (node.child[1], d1))
-            } else {
-                ((node.child[1], d1), (node.child[0], d0))
-            };
-            let bound = Candidate::bound(&best, max2);
-            if far.1 <= bound {
-                stack[top] = far;
-                top += 1;
-            }
-            if near.1 <= bound {
-                stack[top] = near;
-                top += 1;
-            }
-        }
+        });
         best
     }
 
@@ -242,6 +246,14 @@ impl Bvh {
             .map(|q| self.closest(surface, q, max_distance))
             .collect()
     }
+}
+
+/// The slot of the smallest of four distances (the first on ties).
+#[inline]
+fn nearest_slot(d: &[f64; 4]) -> usize {
+    let a = if d[1] < d[0] { 1 } else { 0 };
+    let b = if d[3] < d[2] { 3 } else { 2 };
+    if d[b] < d[a] { b } else { a }
 }
 
 /// Sorts hits by distance, then facet index.

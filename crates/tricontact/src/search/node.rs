@@ -1,0 +1,135 @@
+//! Tree nodes: four child boxes in `f32` (rounded outwards) stored axis by axis, and four child
+//! references.
+//!
+//! A reference with the top bit set is a leaf: `LEAF_FLAG | count << 28 | first` names `count ≤ 7`
+//! facets from `order[first..]`; otherwise it is the index of an internal node. An unused slot is
+//! the empty leaf with an empty box (`+∞ … −∞`), whose distance is `+∞`, so it is never visited.
+//!
+//! The squared distances from a point to the four boxes,
+//! `Σ_axis max(lo − x, x − hi, 0)²`, are computed lane by lane over `[f32; 4]` arrays widened to
+//! `f64`, so the compiler can evaluate the four boxes together; rounding the boxes outwards keeps
+//! every distance a lower bound of the true one.
+
+use crate::linalg::Vec3;
+use crate::search::aabb::Aabb;
+
+/// Children per internal node.
+pub(crate) const WIDTH: usize = 4;
+
+/// Top bit of a child reference: the child is a leaf.
+const LEAF_FLAG: u32 = 1 << 31;
+
+/// A child reference: an internal node index, or a leaf `LEAF_FLAG | count << 28 | first`.
+pub(crate) type Child = u32;
+
+/// The reference of an unused child slot (an empty leaf).
+pub(crate) const EMPTY: Child = LEAF_FLAG;
+
+/// A leaf reference holding `count ≤ 7` facets from `order[first..]` (`first < 2²⁸`).
+#[inline]
+pub(crate) fn leaf(first: u32, count: u32) -> Child {
+    debug_assert!(count < 8 && first < 1 << 28);
+    LEAF_FLAG | (count << 28) | first
+}
+
+/// `Some((first, count))` for a leaf reference.
+#[inline]
+pub(crate) fn as_leaf(child: Child) -> Option<(usize, usize)> {
+    (child & LEAF_FLAG != 0)
+        .then_some(((child & 0x0fff_ffff) as usize, ((child >> 28) & 7) as usize))
+}
+
+/// An internal node.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Node {
+    lo: [[f32; WIDTH]; 3],
+    hi: [[f32; WIDTH]; 3],
+    pub(crate) child: [Child; WIDTH],
+}
+
+impl Node {
+    /// A node with the given references and empty boxes.
+    pub(crate) const fn new(child: [Child; WIDTH]) -> Self {
+        Self {
+            lo: [[f32::INFINITY; WIDTH]; 3],
+            hi: [[f32::NEG_INFINITY; WIDTH]; 3],
+            child,
+        }
+    }
+
+    /// Squared distances from `p` to the four child boxes (zero inside, `+∞` for empty slots).
+    #[inline]
+    pub(crate) fn child_distances_squared(&self, p: &Vec3) -> [f64; WIDTH] {
+        let mut d = [0.0f64; WIDTH];
+        for axis in 0..3 {
+            let x = p[axis];
+            let (lo, hi) = (&self.lo[axis], &self.hi[axis]);
+            for ((dk, &l), &h) in d.iter_mut().zip(lo).zip(hi) {
+                let below = f64::from(l) - x;
+                let above = x - f64::from(h);
+                let g = if below > above { below } else { above };
+                let g = if g > 0.0 { g } else { 0.0 };
+                *dk += g * g;
+            }
+        }
+        d
+    }
+
+    /// Stores `b` as the box of child `k`, rounded outwards to `f32`.
+    pub(crate) fn set_child_box(&mut self, k: usize, b: &Aabb) {
+        for axis in 0..3 {
+            self.lo[axis][k] = round_down(b.min[axis]);
+            self.hi[axis][k] = round_up(b.max[axis]);
+        }
+    }
+}
+
+/// The largest `f32` not above `x`.
+#[allow(clippy::cast_possible_truncation)]
+fn round_down(x: f64) -> f32 {
+    let y = x as f32;
+    if f64::from(y) > x { y.next_down() } else { y }
+}
+
+/// The smallest `f32` not below `x`.
+#[allow(clippy::cast_possible_truncation)]
+fn round_up(x: f64) -> f32 {
+    let y = x as f32;
+    if f64::from(y) < x { y.next_up() } else { y }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn boxes_round_outwards() {
+        for x in [0.1f64, -0.1, 1e10 + 0.3, -3.7e-5, 0.0] {
+            assert!(f64::from(round_down(x)) <= x && f64::from(round_up(x)) >= x);
+        }
+    }
+
+    #[test]
+    fn distances_are_lower_bounds_and_empty_slots_infinite() {
+        let mut n = Node::new([EMPTY; WIDTH]);
+        let b = Aabb {
+            min: Vec3::new(0.1, 0.2, 0.3),
+            max: Vec3::new(1.1, 1.2, 1.3),
+        };
+        n.set_child_box(1, &b);
+        for p in [
+            Vec3::new(0.5, 0.5, 0.5),
+            Vec3::new(-1.0, 2.0, 0.7),
+            Vec3::new(3.0, -0.4, 9.0),
+        ] {
+            let d = n.child_distances_squared(&p);
+            assert!(
+                d[1] <= b.distance_squared(&p) && d[1] >= b.distance_squared(&p) * (1.0 - 1e-6)
+            );
+            assert!(d[0].is_infinite() && d[2].is_infinite() && d[3].is_infinite());
+        }
+        assert_eq!(as_leaf(leaf(12345, 4)), Some((12345, 4)));
+        assert_eq!(as_leaf(EMPTY), Some((0, 0)));
+        assert_eq!(as_leaf(77), None);
+    }
+}
