@@ -126,7 +126,7 @@ fn run(model_path: &Path, output: Option<PathBuf>, verbose: bool) -> Result<(), 
         ProgressStyle::with_template("{bar:40} {pos:>5}/{len} {msg}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    let summary = driver::run(&an, &NoExtra, &mut |info| {
+    let summary = driver::run(&an, &mut NoExtra, &mut |info| {
         writer.write(&an, info)?;
         pb.set_position((info.time * 1000.0).round() as u64);
         pb.set_message(format!("step {} t={:.3}", info.step + 1, info.load_factor));

@@ -33,7 +33,7 @@ pub struct Record {
 /// Runs the analysis and records every increment.
 pub fn solve(an: &Analysis) -> (RunSummary, Vec<Record>) {
     let mut records = Vec::new();
-    let summary = run(an, &NoExtra, &mut |info| {
+    let summary = run(an, &mut NoExtra, &mut |info| {
         records.push(Record {
             step: info.step,
             increment: info.increment,
