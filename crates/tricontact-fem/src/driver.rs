@@ -330,7 +330,7 @@ fn solve_with_outer(
     solver: &mut LinearSolver,
 ) -> std::result::Result<Converged, Failure> {
     extra.begin_increment(u0).map_err(Failure::Diverged)?;
-    let mut c = solve_increment(problem, extra, u0, solver)?;
+    let mut c = solve_increment(problem, extra, u0, u0, solver)?;
     let mut outer = 0;
     while !extra.after_converged(&c.u).map_err(Failure::Diverged)? {
         outer += 1;
@@ -339,7 +339,7 @@ fn solve_with_outer(
                 "outer (Uzawa) loop not converged in {MAX_OUTER} solves"
             )));
         }
-        let next = solve_increment(problem, extra, &c.u, solver)?;
+        let next = solve_increment(problem, extra, u0, &c.u, solver)?;
         let mut residuals = std::mem::take(&mut c.residuals);
         residuals.extend_from_slice(&next.residuals);
         let mut notes = std::mem::take(&mut c.notes);

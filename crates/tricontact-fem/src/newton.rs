@@ -90,7 +90,9 @@ pub struct IncrementProblem<'a> {
     pub follower: &'a [(usize, f64)],
 }
 
-/// Solves one increment starting from the committed `u0`.
+/// Solves one increment from the committed `u0`, iterating from `start` (`u0`, or the converged
+/// state of a previous solve of the same increment in an outer loop); the correction test measures
+/// `Δu` from `u0`.
 ///
 /// # Errors
 /// A [`Failure`]; the caller keeps its committed state.
@@ -98,16 +100,17 @@ pub fn solve_increment(
     p: &IncrementProblem<'_>,
     extra: &mut dyn ExtraTerms,
     u0: &[f64],
+    start: &[f64],
     solver: &mut LinearSolver,
 ) -> Result<Converged, Failure> {
     let (an, dm) = (p.an, p.dm);
     let nlgeom = p.step.nlgeom;
     let symmetric = extra.symmetric() && p.follower.is_empty();
     let reuse = !extra.nonlinear();
-    let mut u = u0.to_vec();
+    let mut u = start.to_vec();
     let mut dup = vec![0.0; u.len()];
     for &(dof, v) in p.prescribed {
-        dup[dof] = v - u0[dof];
+        dup[dof] = v - start[dof];
     }
     let fext_norm = norm(
         (0..dm.eq.len())
