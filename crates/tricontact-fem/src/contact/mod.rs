@@ -22,6 +22,12 @@
 //! * Augmented Lagrangian: after Newton converged, if the largest penetration exceeds the pair's
 //!   tolerance, every node's estimate takes the Uzawa update `λ_k ← min(0, λ_k + αP)` and the
 //!   increment is solved again (outer loop of [`crate::driver`]).
+//! * Facet cycling: a node sitting in a concave kink of the master (a valley, e.g. the bottom of
+//!   an indentation) has no single-facet equilibrium and flips between the flanks. After
+//!   [`MAX_SWITCHES`] facet changes in an increment its facet is frozen (its plane extended) for
+//!   the rest of the increment, and counted as frozen in the iteration log. A node in no facet's
+//!   projection region keeps its previous facet while its foot is within [`LOST_TOLERANCE`] of it
+//!   and it penetrates.
 //! * The node states (facet, shape functions, normal, multiplier estimate, status) are committed at
 //!   convergence and restored on a cutback.
 
@@ -47,6 +53,10 @@ use state::NodeState;
 /// Tolerance of the facet hysteresis (see [`ContactTerms`]'s evaluation): barycentric, and
 /// relative to the mean facet size for the gap.
 pub const HYSTERESIS: f64 = 1e-6;
+
+/// How far (barycentric) a node in no facet's projection region (below a concave kink) may be
+/// outside its previous facet and keep it.
+pub const LOST_TOLERANCE: f64 = 0.1;
 
 /// Status changes of a node within one increment before its status is frozen.
 pub const MAX_SWITCHES: u32 = 4;
@@ -151,25 +161,44 @@ impl ContactTerms {
         let s = pass.slaves[j];
         let nodes_of = |f: u32| pass.surface.facets()[f as usize].map(|a| a as usize);
         if let Some(bvh) = bvh {
-            let (f, pair) =
-                choose_facet(&pass.surface, bvh, x, u32::try_from(s).ok()?, pass.radius)?;
+            let st = &self.trial[p][q][j];
+            let previous = st
+                .facet
+                .filter(|&f| (f as usize) < pass.surface.len())
+                .and_then(|f| {
+                    let nodes = nodes_of(f);
+                    tricontact::NodeFacet::new(x[nodes[0]], x[nodes[1]], x[nodes[2]], x[s])
+                        .ok()
+                        .map(|pair| (f, nodes, pair))
+                });
+            // Facet frozen after cycling: its plane (extended) for the rest of the increment.
+            if st.facet_frozen
+                && let Some((f, nodes, pair)) = previous
+            {
+                return Some((f, nodes, Gap::Finite(pair)));
+            }
+            let Some((f, pair)) =
+                choose_facet(&pass.surface, bvh, x, u32::try_from(s).ok()?, pass.radius)
+            else {
+                // In no facet's projection region (below a valley): the previous facet's plane
+                // while the foot stays within LOST_TOLERANCE of it.
+                return previous
+                    .filter(|(_, _, pair)| {
+                        pair.projection.is_inside(LOST_TOLERANCE) && pair.gap() <= 0.0
+                    })
+                    .map(|(f, nodes, pair)| (f, nodes, Gap::Finite(pair)));
+            };
             // Hysteresis: keep the previous facet while the node still projects into it within
             // HYSTERESIS (barycentric) and its |P| is not larger than the chosen one's by more
             // than HYSTERESIS·h. A node on a shared edge or vertex otherwise flips between facets
             // from one iteration to the next, and with it the Hessian term `λ∇²P` of the tangent
             // (it jumps across edges): Newton then cycles instead of converging.
-            if let Some(prev) = self.trial[p][q][j].facet
+            if let Some((prev, nodes, old)) = previous
                 && prev != f
-                && (prev as usize) < pass.surface.len()
+                && old.projection.is_inside(HYSTERESIS)
+                && old.gap().abs() <= pair.gap().abs() + HYSTERESIS * self.pairs[p].facet_size
             {
-                let nodes = nodes_of(prev);
-                if let Ok(old) =
-                    tricontact::NodeFacet::new(x[nodes[0]], x[nodes[1]], x[nodes[2]], x[s])
-                    && old.projection.is_inside(HYSTERESIS)
-                    && old.gap().abs() <= pair.gap().abs() + HYSTERESIS * self.pairs[p].facet_size
-                {
-                    return Some((prev, nodes, Gap::Finite(old)));
-                }
+                return Some((prev, nodes, Gap::Finite(old)));
             }
             Some((f, nodes_of(f), Gap::Finite(pair)))
         } else {
@@ -225,6 +254,8 @@ impl ExtraTerms for ContactTerms {
         for st in self.trial.iter_mut().flatten().flatten() {
             st.switches = 0;
             st.frozen = None;
+            st.facet_switches = 0;
+            st.facet_frozen = false;
         }
         let x = self.positions(u);
         for p in 0..self.pairs.len() {
@@ -255,7 +286,8 @@ impl ExtraTerms for ContactTerms {
         let x = self.positions(u);
         let n_nodal = 3 * self.reference.len();
         let mut force = vec![0.0; n_nodal];
-        let (mut active_count, mut changed, mut frozen) = (0usize, 0usize, 0usize);
+        let (mut active_count, mut changed, mut frozen, mut moved) =
+            (0usize, 0usize, 0usize, 0usize);
         for p in 0..self.pairs.len() {
             let (method, alpha, small) = {
                 let pr = &self.pairs[p];
@@ -273,6 +305,18 @@ impl ExtraTerms for ContactTerms {
                     let eval = self.evaluate(p, q, j, &x, bvh.as_ref());
                     let st = &mut self.trial[p][q][j];
                     let was_active = st.active;
+                    if eval.as_ref().map(|e| e.0) != st.facet {
+                        moved += 1;
+                        if st.facet.is_some() && eval.is_some() {
+                            st.facet_switches += 1;
+                            if st.facet_switches > MAX_SWITCHES {
+                                st.facet_frozen = true;
+                            }
+                        }
+                    }
+                    if st.facet_frozen {
+                        frozen += 1;
+                    }
                     match &eval {
                         Some((f, _, g)) => {
                             let w = g.normal();
@@ -377,9 +421,11 @@ impl ExtraTerms for ContactTerms {
         }
         self.trial_force = force;
         self.note = Some(if frozen > 0 {
-            format!("contact: {active_count} closed, {changed} changed, {frozen} frozen (cycling)")
+            format!(
+                "contact: {active_count} closed, {changed} changed, {moved} changed facet, {frozen} frozen (cycling)"
+            )
         } else {
-            format!("contact: {active_count} closed, {changed} changed")
+            format!("contact: {active_count} closed, {changed} changed, {moved} changed facet")
         });
         Ok(())
     }

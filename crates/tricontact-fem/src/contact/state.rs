@@ -24,6 +24,10 @@ pub struct NodeState {
     pub switches: u32,
     /// Status frozen for the rest of the increment after cycling.
     pub frozen: Option<bool>,
+    /// Facet changes in this increment (cycle detection).
+    pub facet_switches: u32,
+    /// Facet frozen for the rest of the increment after cycling.
+    pub facet_frozen: bool,
     /// Small sliding: facet, shape functions and normal at the start of the increment.
     pub start: Option<(u32, [f64; 3], [f64; 3])>,
 }
