@@ -381,13 +381,19 @@ pub fn assemble(
     extra
         .add_terms(u, &mut residual, &mut trip)
         .map_err(AssemblyError::Extra)?;
-    let extra_triplets = trip
-        .into_iter()
-        .filter_map(|(r, c, v)| {
-            let (er, ec) = (dm.eq[r], dm.eq[c]);
-            (er != NO_EQ && ec != NO_EQ).then(|| Triplet::new(er, ec, v))
-        })
-        .collect();
+    let mut extra_triplets = Vec::with_capacity(trip.len());
+    for (r, c, v) in trip {
+        let (er, ec) = (dm.eq[r], dm.eq[c]);
+        if er == NO_EQ {
+            continue;
+        }
+        if ec != NO_EQ {
+            extra_triplets.push(Triplet::new(er, ec, v));
+        } else if let Some(dup) = dup {
+            // Prescribed column (e.g. a rigid contact tool): predictor term.
+            predictor[er] -= v * dup[c];
+        }
+    }
     Ok(Assembled {
         residual,
         values,

@@ -395,3 +395,43 @@ fn bad_contact_input_is_rejected_with_a_clear_message() {
         .to_string();
     assert!(e.contains("inconsistently oriented"), "{e}");
 }
+
+#[test]
+fn block_pressed_by_a_rigid_tool_without_volume_elements() {
+    // The lower box has no body: its top face is a rigid master, moved up by 0.01 against a
+    // block held at its top. The tool's nodes are fully prescribed; the contact force balances the
+    // block's reaction.
+    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Tet4);
+    let u = box_mesh([0.5, 0.5, 0.25], [2, 2, 1], ElementKind::Hex8);
+    let mesh = common::stack(&l, &u, [0.25, 0.25, 0.5]);
+    let text = format!(
+        "[[material]]\nname = \"m\"\ntype = \"linear_elastic\"\nE = 1000.0\nnu = 0.3\n[[body]]\ngroup = \"upper_solid\"\nmaterial = \"m\"\n[[boundary]]\ngroup = \"lower_zmax\"\ndisplacement = {{ x = 0.0, y = 0.0, z = 0.01 }}\n[[boundary]]\ngroup = \"upper_zmax\"\nfix = [\"x\", \"y\", \"z\"]\n{}[[step]]\nincrements = 2\n",
+        contact("multiplier", "")
+    );
+    let an = common::analysis(mesh, &text);
+    let (terms, rec, _) = common::solve_contact(&an);
+    let last = rec.last().expect("increments");
+    let reaction = last.reactions[1][2];
+    let force = history(&terms, "_normal_force");
+    assert!(force > 0.0 && history(&terms, "_active") == 9.0);
+    assert!(
+        (force + reaction).abs() <= 1e-8 * force,
+        "{force} vs reaction {reaction}"
+    );
+    // A rigid master node without all three components prescribed is an error.
+    let bad = text.replace(
+        "displacement = { x = 0.0, y = 0.0, z = 0.01 }",
+        "fix = [\"z\"]",
+    );
+    let model = Model::parse(
+        &format!("[mesh]\nfile = \"x.msh\"\n{bad}"),
+        std::path::Path::new("m.toml"),
+    )
+    .expect("model");
+    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Tet4);
+    let u = box_mesh([0.5, 0.5, 0.25], [2, 2, 1], ElementKind::Hex8);
+    let e = Analysis::new(&model, common::stack(&l, &u, [0.25, 0.25, 0.5]))
+        .expect_err("under-prescribed tool")
+        .to_string();
+    assert!(e.contains("rigid contact surface"), "{e}");
+}
