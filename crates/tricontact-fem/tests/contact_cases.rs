@@ -435,3 +435,45 @@ fn block_pressed_by_a_rigid_tool_without_volume_elements() {
         .to_string();
     assert!(e.contains("rigid contact surface"), "{e}");
 }
+
+#[test]
+fn contact_fields_and_history_columns_are_written() {
+    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
+    let u = box_mesh([0.5, 0.5, 0.25], [2, 2, 1], ElementKind::Hex8);
+    let mesh = common::stack(&l, &u, [0.25, 0.25, 0.5]);
+    let text = format!(
+        "{MAT}[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n[[boundary]]\ngroup = \"upper_zmax\"\ndisplacement = {{ x = 0.0, y = 0.0, z = -0.01 }}\n{}[[step]]\n",
+        contact("penalty", "")
+    );
+    let an = common::analysis(mesh, &text);
+    let dir = std::env::temp_dir().join(format!("tricontact-contact-out-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut w = tricontact_fem::output::ResultWriter::new(&an, &dir, "m").expect("writer");
+    let mut terms = ContactTerms::new(&an);
+    tricontact_fem::driver::run(&an, &mut terms, &mut |info| w.write(&an, info)).expect("run");
+    let csv = std::fs::read_to_string(dir.join("history.csv")).expect("history");
+    let header = csv.lines().next().expect("header");
+    for col in ["_normal_force", "_active", "_max_penetration", "_area"] {
+        assert!(
+            header.contains(&format!("upper_zmin-lower_zmax{col}")),
+            "{header}"
+        );
+    }
+    let row: Vec<&str> = csv.lines().nth(1).expect("row").split(',').collect();
+    assert_eq!(row.len(), header.split(',').count());
+    let vtu = std::fs::read_to_string(dir.join("m_001_0001.vtu")).expect("vtu");
+    for field in [
+        "contact_force",
+        "contact_pressure",
+        "contact_gap",
+        "contact_status",
+        "contact_facet",
+    ] {
+        assert!(vtu.contains(&format!("Name=\"{field}\"")), "{field}");
+    }
+    assert!(!vtu.contains("NaN"));
+    // Area of the closed nodes = the block's bottom (all 9 nodes closed).
+    let area = history(&terms, "_area");
+    assert!((area - 0.25).abs() < 1e-12, "{area}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
