@@ -190,6 +190,22 @@ fn check(model_path: &Path) -> Result<(), FemError> {
         active,
         3 * active
     );
+    for pair in &an.contacts {
+        let facets: usize = pair.passes.iter().map(|p| p.surface.len()).sum();
+        println!(
+            "contact {}: {:?}, {} slave nodes, {} facets, {} pass(es), penalty {:.3e}, mean facet edge {:.3e}",
+            pair.name,
+            pair.method,
+            pair.passes[0].slaves.len(),
+            facets,
+            pair.passes.len(),
+            pair.penalty,
+            pair.facet_size
+        );
+        for line in &pair.report {
+            println!("  {line}");
+        }
+    }
     for s in 0..an.steps.len() {
         let (mask, _) = driver::step_constraints(&an, s);
         let prescribed = mask.iter().filter(|&&m| m).count();
