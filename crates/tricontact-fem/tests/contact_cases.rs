@@ -477,3 +477,48 @@ fn contact_fields_and_history_columns_are_written() {
     assert!((area - 0.25).abs() < 1e-12, "{area}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn multiplier_status_cycling_is_frozen_and_reported() {
+    use tricontact_fem::assembly::ExtraTerms;
+    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
+    let u = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
+    let mesh = common::stack(&l, &u, [0.0, 0.0, 0.5]);
+    let text = format!(
+        "{MAT}[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n{}[[step]]\n",
+        contact("multiplier", "")
+    );
+    let an = common::analysis(mesh, &text);
+    let mut terms = ContactTerms::new(&an);
+    let n = an.num_nodal_dofs();
+    let mut u = vec![0.0; n + terms.num_extra()];
+    terms.begin_increment(&u).expect("begin");
+    // Touching nodes (P = 0): λ = −1 closes them, λ = +1 (a pull) opens them. Alternate.
+    let mut notes = Vec::new();
+    for k in 0..8 {
+        let lambda = if k % 2 == 0 { -1.0 } else { 1.0 };
+        u[n..].iter_mut().for_each(|v| *v = lambda);
+        let mut r = vec![0.0; u.len()];
+        let mut t = Vec::new();
+        terms.add_terms(&u, &mut r, &mut t).expect("terms");
+        notes.push(terms.iteration_note().unwrap_or_default());
+    }
+    // Switches 1..=4 are allowed; the 5th change freezes every node in its status.
+    assert!(!notes[3].contains("frozen"), "{notes:?}");
+    assert!(notes[4].contains("9 frozen"), "{notes:?}");
+    assert!(
+        notes[5].contains(" 0 changed"),
+        "frozen status must not change: {notes:?}"
+    );
+    // A new increment starts unfrozen.
+    terms.restore();
+    terms.begin_increment(&vec![0.0; u.len()]).expect("begin");
+    let mut r = vec![0.0; u.len()];
+    terms.add_terms(&u, &mut r, &mut Vec::new()).expect("terms");
+    assert!(
+        !terms
+            .iteration_note()
+            .unwrap_or_default()
+            .contains("frozen")
+    );
+}
