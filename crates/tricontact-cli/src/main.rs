@@ -11,7 +11,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use tricontact_fem::analysis::Analysis;
-use tricontact_fem::assembly::NoExtra;
+use tricontact_fem::contact::ContactTerms;
 use tricontact_fem::driver::{self, IncrementInfo};
 use tricontact_fem::model::Model;
 use tricontact_fem::output::ResultWriter;
@@ -126,15 +126,27 @@ fn run(model_path: &Path, output: Option<PathBuf>, verbose: bool) -> Result<(), 
         ProgressStyle::with_template("{bar:40} {pos:>5}/{len} {msg}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    let summary = driver::run(&an, &NoExtra, &mut |info| {
+    for pair in &an.contacts {
+        for line in &pair.report {
+            println!("{line}");
+        }
+    }
+    let mut contact = ContactTerms::new(&an);
+    let summary = driver::run(&an, &mut contact, &mut |info| {
         writer.write(&an, info)?;
         pb.set_position((info.time * 1000.0).round() as u64);
         pb.set_message(format!("step {} t={:.3}", info.step + 1, info.load_factor));
         if verbose {
-            if pb.is_hidden() {
-                println!("{}", increment_line(info));
-            } else {
-                pb.println(increment_line(info));
+            let mut lines = vec![increment_line(info)];
+            for (k, note) in info.notes.iter().enumerate() {
+                lines.push(format!("    iteration {k}: {note}"));
+            }
+            for line in lines {
+                if pb.is_hidden() {
+                    println!("{line}");
+                } else {
+                    pb.println(line);
+                }
             }
         }
         Ok(())
@@ -178,6 +190,22 @@ fn check(model_path: &Path) -> Result<(), FemError> {
         active,
         3 * active
     );
+    for pair in &an.contacts {
+        let facets: usize = pair.passes.iter().map(|p| p.surface.len()).sum();
+        println!(
+            "contact {}: {:?}, {} slave nodes, {} facets, {} pass(es), penalty {:.3e}, mean facet edge {:.3e}",
+            pair.name,
+            pair.method,
+            pair.passes[0].slaves.len(),
+            facets,
+            pair.passes.len(),
+            pair.penalty,
+            pair.facet_size
+        );
+        for line in &pair.report {
+            println!("  {line}");
+        }
+    }
     for s in 0..an.steps.len() {
         let (mask, _) = driver::step_constraints(&an, s);
         let prescribed = mask.iter().filter(|&&m| m).count();
@@ -190,6 +218,7 @@ fn check(model_path: &Path) -> Result<(), FemError> {
             an.steps[s].nlgeom
         );
         if problems.is_empty()
+            && an.contacts.is_empty()
             && let Err(m) = rigid::check_supports(&an, &mask)
         {
             problems.push(FemError::Singular(format!(

@@ -171,3 +171,20 @@ fn tet10_example_reactions_balance_the_pressure() {
     );
     assert!(get("right_Rx") > 0.0, "stretching needs a positive force");
 }
+
+#[test]
+fn contact_example_checks() {
+    let model =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/contact-block/model.toml");
+    let o = bin()
+        .args(["check", model.to_str().expect("utf8")])
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{stdout} {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(stdout.contains("no problems found"), "{stdout}");
+}

@@ -11,6 +11,7 @@
 use std::collections::HashMap;
 use std::path::PathBuf;
 
+use crate::contact::ContactPair;
 use crate::element::jacobian_dets;
 use crate::error::{FemError, Result};
 use crate::loads;
@@ -93,6 +94,8 @@ pub struct Analysis {
     pub loads: Vec<Load>,
     /// Steps.
     pub steps: Vec<Step>,
+    /// Contact pairs.
+    pub contacts: Vec<ContactPair>,
     /// Output settings.
     pub output: OutputDef,
     /// Resolved output folder.
@@ -133,7 +136,7 @@ impl Analysis {
 
     /// Resolves the model, returning the analysis and every problem found.
     #[must_use]
-    pub fn build(model: &Model, mesh: Mesh) -> (Self, Vec<FemError>) {
+    pub fn build(model: &Model, mut mesh: Mesh) -> (Self, Vec<FemError>) {
         let mut problems: Vec<FemError> = Vec::new();
         let unknown = |kind: &'static str, name: &str, mesh: &Mesh| FemError::UnknownGroup {
             kind,
@@ -330,6 +333,38 @@ impl Analysis {
             )));
         }
 
+        // Contact pairs (may move adjusted slave nodes; rigid master nodes become active).
+        let in_body = active_nodes.clone();
+        let mut rigid = vec![false; mesh.nodes.len()];
+        let mut contacts = Vec::new();
+        {
+            let youngs: Vec<f64> = body
+                .iter()
+                .map(|b| {
+                    let m = &materials[b.material];
+                    m.mu * (3.0 * m.lambda + 2.0 * m.mu) / (m.lambda + m.mu)
+                })
+                .collect();
+            let mut moved = mesh.clone();
+            let bodies = crate::contact::pair::Bodies {
+                elements: body.iter().map(|b| &mesh.elements[b.element]).collect(),
+                youngs,
+            };
+            for c in &model.contacts {
+                match crate::contact::pair::resolve(c, &mut moved, &bodies, &in_body, &mut rigid) {
+                    Ok(p) => contacts.push(p),
+                    Err(list) => problems.extend(list.into_iter().map(&invalid)),
+                }
+            }
+            drop(bodies);
+            mesh.nodes = moved.nodes;
+        }
+        for (a, &r) in rigid.iter().enumerate() {
+            if r {
+                active_nodes[a] = true;
+            }
+        }
+
         // Boundaries.
         let mut boundaries = Vec::new();
         for b in &model.boundaries {
@@ -406,6 +441,25 @@ impl Analysis {
                         }
                     }
                 }
+            }
+        }
+
+        // Rigid master nodes (no volume element) must be fully prescribed in every step.
+        for s in 0..steps.len() {
+            let mut held = vec![0u8; mesh.nodes.len()];
+            for b in boundaries.iter().filter(|b| b.active[s]) {
+                for &a in &b.nodes {
+                    for v in b.values.iter().flatten() {
+                        let _ = v;
+                        held[a] += 1;
+                    }
+                }
+            }
+            if let Some(a) = (0..mesh.nodes.len()).find(|&a| rigid[a] && held[a] < 3) {
+                problems.push(invalid(format!(
+                    "step '{}': node {} of a rigid contact surface (no volume element) must have x, y and z prescribed",
+                    steps[s].name, mesh.node_tags[a]
+                )));
             }
         }
 
@@ -513,6 +567,7 @@ impl Analysis {
             active_nodes,
             boundaries,
             loads: load_list,
+            contacts,
             steps,
             output: model.output.clone(),
             output_dir: model.output_dir(),

@@ -23,11 +23,20 @@ use crate::element::{Inverted, internal_force};
 /// Marker for a DOF without an equation.
 pub const NO_EQ: usize = usize::MAX;
 
-/// Contributions from outside the element loop (contact, springs, …).
+/// Contributions from outside the element loop (contact, springs, …), with
+/// their own state.
 ///
 /// `u` and `residual` are global DOF vectors (nodal then extra unknowns);
 /// triplets `(row, col, value)` use global DOF indices and add to `∂r/∂u`.
-pub trait ExtraTerms: Sync {
+///
+/// Life cycle, driven by [`crate::driver::run`]: per increment attempt
+/// [`begin_increment`](Self::begin_increment) (trial state from the committed
+/// one), [`add_terms`](Self::add_terms) per Newton iteration (it may update
+/// the trial state, e.g. an active set), [`after_converged`](Self::after_converged)
+/// when Newton converged (`false` asks for another solve of the same increment,
+/// e.g. an Uzawa update), then [`commit`](Self::commit) — or
+/// [`restore`](Self::restore) on a cutback.
+pub trait ExtraTerms: Send {
     /// Number of unknowns beyond the nodal DOFs.
     fn num_extra(&self) -> usize {
         0
@@ -36,8 +45,60 @@ pub trait ExtraTerms: Sync {
     fn symmetric(&self) -> bool {
         true
     }
+    /// Whether the terms are nonlinear in `u`: disables the constant-tangent
+    /// shortcut of small-strain steps.
+    fn nonlinear(&self) -> bool {
+        self.num_extra() > 0
+    }
+    /// Whether the terms may support bodies (contact): skips the rigid-body
+    /// support check of the bodies alone.
+    fn supports_bodies(&self) -> bool {
+        self.num_extra() > 0
+    }
+    /// Start of an increment attempt from the committed displacements `u`.
+    ///
+    /// # Errors
+    /// A message (the attempt fails and is cut back).
+    fn begin_increment(&mut self, _u: &[f64]) -> Result<(), String> {
+        Ok(())
+    }
     /// Adds to the residual and tangent at `u`.
-    fn add_terms(&self, u: &[f64], residual: &mut [f64], triplets: &mut Vec<(usize, usize, f64)>);
+    ///
+    /// # Errors
+    /// A message (the attempt fails and is cut back).
+    fn add_terms(
+        &mut self,
+        u: &[f64],
+        residual: &mut [f64],
+        triplets: &mut Vec<(usize, usize, f64)>,
+    ) -> Result<(), String>;
+    /// A short note on the last [`add_terms`](Self::add_terms) for the
+    /// per-iteration log (e.g. the active-set size).
+    fn iteration_note(&self) -> Option<String> {
+        None
+    }
+    /// Newton converged at `u`: `Ok(true)` accepts the increment, `Ok(false)`
+    /// asks for another solve from `u` (state updated).
+    ///
+    /// # Errors
+    /// A message (the attempt fails and is cut back).
+    fn after_converged(&mut self, _u: &[f64]) -> Result<bool, String> {
+        Ok(true)
+    }
+    /// The increment is accepted: the trial state becomes the committed one.
+    fn commit(&mut self) {}
+    /// The increment attempt failed: back to the committed state.
+    fn restore(&mut self) {}
+    /// Point fields for the result files at the committed state:
+    /// `(name, components, values over all nodes)`.
+    fn point_fields(&self) -> Vec<(String, usize, Vec<f64>)> {
+        Vec::new()
+    }
+    /// History columns at the committed state: `(name, value)`, same names
+    /// every increment.
+    fn history(&self) -> Vec<(String, f64)> {
+        Vec::new()
+    }
 }
 
 /// No extra terms.
@@ -46,11 +107,12 @@ pub struct NoExtra;
 
 impl ExtraTerms for NoExtra {
     fn add_terms(
-        &self,
+        &mut self,
         _u: &[f64],
         _residual: &mut [f64],
         _triplets: &mut Vec<(usize, usize, f64)>,
-    ) {
+    ) -> Result<(), String> {
+        Ok(())
     }
 }
 
@@ -193,10 +255,14 @@ impl Assembled {
     }
 }
 
-/// Failure of an assembly: the body element (index into `Analysis::body`)
-/// where a point inverted.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct InvertedAt(pub usize);
+/// Failure of an assembly.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum AssemblyError {
+    /// The body element (index into `Analysis::body`) where a point inverted.
+    Inverted(usize),
+    /// The extra terms failed (message).
+    Extra(String),
+}
 
 const BATCH: usize = 4096;
 
@@ -207,7 +273,8 @@ type Block = (Vec<f64>, Vec<f64>);
 /// for prescribed increments `dup` (global DOF vector) if given.
 ///
 /// # Errors
-/// [`InvertedAt`] the first (in element order) inverted element.
+/// [`AssemblyError::Inverted`] the first (in element order) inverted
+/// element; [`AssemblyError::Extra`] a failure of the extra terms.
 #[allow(clippy::too_many_arguments)]
 pub fn assemble(
     an: &Analysis,
@@ -217,8 +284,8 @@ pub fn assemble(
     nlgeom: bool,
     tangent: bool,
     dup: Option<&[f64]>,
-    extra: &dyn ExtraTerms,
-) -> Result<Assembled, InvertedAt> {
+    extra: &mut dyn ExtraTerms,
+) -> Result<Assembled, AssemblyError> {
     let mut residual = vec![0.0; dm.eq.len()];
     let mut values = if tangent {
         vec![0.0; pat.symbolic.row_idx().len()]
@@ -257,7 +324,7 @@ pub fn assemble(
             })
             .collect();
         for (j, (be, block)) in batch.iter().zip(blocks).enumerate() {
-            let (f, k) = block.map_err(|_| InvertedAt(batch_index * BATCH + j))?;
+            let (f, k) = block.map_err(|_| AssemblyError::Inverted(batch_index * BATCH + j))?;
             let nodes = &an.mesh.elements[be.element].nodes;
             let nd = 3 * nodes.len();
             for (la, &a) in nodes.iter().enumerate() {
@@ -311,14 +378,22 @@ pub fn assemble(
         }
     }
     let mut trip = Vec::new();
-    extra.add_terms(u, &mut residual, &mut trip);
-    let extra_triplets = trip
-        .into_iter()
-        .filter_map(|(r, c, v)| {
-            let (er, ec) = (dm.eq[r], dm.eq[c]);
-            (er != NO_EQ && ec != NO_EQ).then(|| Triplet::new(er, ec, v))
-        })
-        .collect();
+    extra
+        .add_terms(u, &mut residual, &mut trip)
+        .map_err(AssemblyError::Extra)?;
+    let mut extra_triplets = Vec::with_capacity(trip.len());
+    for (r, c, v) in trip {
+        let (er, ec) = (dm.eq[r], dm.eq[c]);
+        if er == NO_EQ {
+            continue;
+        }
+        if ec != NO_EQ {
+            extra_triplets.push(Triplet::new(er, ec, v));
+        } else if let Some(dup) = dup {
+            // Prescribed column (e.g. a rigid contact tool): predictor term.
+            predictor[er] -= v * dup[c];
+        }
+    }
     Ok(Assembled {
         residual,
         values,

@@ -11,14 +11,17 @@
 //! Increment control: start with `Δt = 1/increments`; on a [`Failure`] the
 //! state is restored to the last converged increment and `Δt` is halved (at
 //! most `max_cutbacks` times in a row); after two converged increments in a
-//! row `Δt` doubles back, up to its initial value. State (`u`) is committed
-//! only at converged increments.
+//! row `Δt` doubles back, up to its initial value. State (`u` and the state
+//! of the [`ExtraTerms`]) is committed only at converged increments and
+//! restored on a cutback. When the extra terms ask for another solve after
+//! Newton converged (an Uzawa update), the increment is solved again from the
+//! converged state, at most [`MAX_OUTER`] times.
 
 use crate::analysis::{Analysis, Load};
 use crate::assembly::{DofMap, ExtraTerms, Pattern, node_adjacency};
 use crate::error::{FemError, Result};
 use crate::linsolve::LinearSolver;
-use crate::newton::{Failure, IncrementProblem, solve_increment};
+use crate::newton::{Converged, Failure, IncrementProblem, solve_increment};
 use crate::ordering::equation_order;
 use crate::rigid::check_supports;
 
@@ -51,6 +54,13 @@ pub struct IncrementInfo<'a> {
     pub nlgeom: bool,
     /// Factorization used last.
     pub method: &'a str,
+    /// Notes of the extra terms per Newton iteration (e.g. contact active set).
+    pub notes: &'a [String],
+    /// Extra point fields at the committed state (see
+    /// [`ExtraTerms::point_fields`]).
+    pub point_fields: &'a [(String, usize, Vec<f64>)],
+    /// Extra history columns at the committed state.
+    pub history: &'a [(String, f64)],
 }
 
 /// Totals of a run.
@@ -196,13 +206,16 @@ pub fn external_forces(an: &Analysis, n_dofs: usize, s: usize, t: f64) -> Vec<f6
     f
 }
 
+/// Most solves of one increment asked for by [`ExtraTerms::after_converged`].
+pub const MAX_OUTER: usize = 50;
+
 /// Runs all steps; `observer` sees each converged increment.
 ///
 /// # Errors
 /// Singular model, non-convergence after all cutbacks, observer errors.
 pub fn run(
     an: &Analysis,
-    extra: &dyn ExtraTerms,
+    extra: &mut dyn ExtraTerms,
     observer: &mut dyn FnMut(&IncrementInfo<'_>) -> Result<()>,
 ) -> Result<RunSummary> {
     let n_dofs = an.num_nodal_dofs() + extra.num_extra();
@@ -212,7 +225,7 @@ pub fn run(
     let mut last_reactions = vec![0.0; n_dofs];
     for (s, step) in an.steps.iter().enumerate() {
         let (mask, targets) = step_constraints(an, s);
-        if extra.num_extra() == 0 {
+        if !extra.supports_bodies() {
             check_supports(an, &mask)
                 .map_err(|m| FemError::Singular(format!("step '{}': {m}", step.name)))?;
         }
@@ -245,14 +258,14 @@ pub fn run(
                 an,
                 dm: &dm,
                 pat: &pat,
-                extra,
                 step,
                 fext: &fext,
                 prescribed: &prescribed,
                 follower: &follower,
             };
-            match solve_increment(&problem, &u, &mut solver) {
+            match solve_with_outer(&problem, extra, &u, &mut solver) {
                 Ok(c) => {
+                    extra.commit();
                     u = c.u;
                     t = t_new;
                     increment += 1;
@@ -263,6 +276,8 @@ pub fn run(
                         reactions[dof] = c.residual[dof];
                     }
                     last_reactions.clone_from(&reactions);
+                    let point_fields = extra.point_fields();
+                    let history = extra.history();
                     observer(&IncrementInfo {
                         step: s,
                         step_name: &step.name,
@@ -277,10 +292,14 @@ pub fn run(
                         reactions: &reactions,
                         nlgeom: step.nlgeom,
                         method: c.method,
+                        notes: &c.notes,
+                        point_fields: &point_fields,
+                        history: &history,
                     })?;
                     control.converged();
                 }
                 Err(failure) => {
+                    extra.restore();
                     if let (Failure::Singular(m), false) = (&failure, step.nlgeom) {
                         return Err(FemError::Singular(format!("step '{}': {m}", step.name)));
                     }
@@ -299,6 +318,42 @@ pub fn run(
     }
     summary.u = u;
     Ok(summary)
+}
+
+/// One increment: Newton, repeated from the converged state while the extra
+/// terms ask for it (outer loop). Residual histories and iteration counts of
+/// the solves are concatenated.
+fn solve_with_outer(
+    problem: &IncrementProblem<'_>,
+    extra: &mut dyn ExtraTerms,
+    u0: &[f64],
+    solver: &mut LinearSolver,
+) -> std::result::Result<Converged, Failure> {
+    extra.begin_increment(u0).map_err(Failure::Diverged)?;
+    let mut c = solve_increment(problem, extra, u0, u0, solver)?;
+    let mut outer = 0;
+    while !extra.after_converged(&c.u).map_err(Failure::Diverged)? {
+        outer += 1;
+        if outer > MAX_OUTER {
+            return Err(Failure::Diverged(format!(
+                "outer (Uzawa) loop not converged in {MAX_OUTER} solves"
+            )));
+        }
+        let next = solve_increment(problem, extra, u0, &c.u, solver)?;
+        let mut residuals = std::mem::take(&mut c.residuals);
+        residuals.extend_from_slice(&next.residuals);
+        let mut notes = std::mem::take(&mut c.notes);
+        notes.extend(next.notes.iter().cloned());
+        let iterations = c.iterations + next.iterations;
+        c = Converged {
+            residuals,
+            notes,
+            iterations,
+            reference: c.reference.max(next.reference),
+            ..next
+        };
+    }
+    Ok(c)
 }
 
 #[cfg(test)]

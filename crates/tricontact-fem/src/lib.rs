@@ -13,6 +13,7 @@
 pub mod analysis;
 pub mod assembly;
 pub mod atomic;
+pub mod contact;
 pub mod driver;
 pub mod element;
 pub mod error;

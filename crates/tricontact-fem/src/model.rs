@@ -29,6 +29,9 @@ pub struct Model {
     /// Forces and pressures.
     #[serde(default, rename = "load")]
     pub loads: Vec<LoadDef>,
+    /// Contact pairs.
+    #[serde(default, rename = "contact")]
+    pub contacts: Vec<ContactDef>,
     /// Analysis steps, run in order.
     #[serde(default, rename = "step")]
     pub steps: Vec<StepDef>,
@@ -151,6 +154,50 @@ pub struct LoadDef {
     pub follower: bool,
     /// Names of the steps in which it is active (default: all).
     pub steps: Option<Vec<String>>,
+}
+
+/// Contact enforcement method.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactMethod {
+    /// Penalty `αP` on penetrating nodes.
+    Penalty,
+    /// Lagrange multipliers (one unknown per slave node, primal–dual active set).
+    Multiplier,
+    /// Augmented Lagrangian: penalty plus Uzawa multiplier updates.
+    Augmented,
+}
+
+/// `[[contact]]`.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ContactDef {
+    /// Surface or node group: its nodes are the slave nodes.
+    pub slave: String,
+    /// Surface group: its faces are the master facets.
+    pub master: String,
+    /// Enforcement method.
+    pub method: ContactMethod,
+    /// Penalty factor (force per length); default `10 E h` (see README-model).
+    pub penalty: Option<f64>,
+    /// Also constrain the master nodes against the slave surface.
+    #[serde(default)]
+    pub two_pass: bool,
+    /// Initial penetrations up to this distance are removed by moving slave
+    /// nodes onto the master surface (strain-free).
+    pub adjust: Option<f64>,
+    /// Augmented Lagrangian: largest penetration allowed, relative to the
+    /// mean master facet edge length.
+    #[serde(default = "default_contact_tolerance")]
+    pub tolerance: f64,
+    /// Keep each node's facet, shape functions and normal from the start of
+    /// the increment.
+    #[serde(default)]
+    pub small_sliding: bool,
+}
+
+fn default_contact_tolerance() -> f64 {
+    1e-4
 }
 
 /// `[[step]]`.

@@ -1,5 +1,8 @@
 //! Newton–Raphson solution of one load increment.
 //!
+//! Small-strain steps are linear unless the extra terms say otherwise
+//! ([`ExtraTerms::nonlinear`], e.g. contact) or follower loads act.
+//!
 //! Unknowns: free DOFs (and extra unknowns); prescribed DOFs move from their
 //! committed values to the increment's targets `u_p`. Iteration 0 is the
 //! linearised predictor `K_ff Δu_f = −(r_f + K_fp Δu_p)` assembled at the
@@ -20,7 +23,7 @@
 //! inverted element, or a singular tangent.
 
 use crate::analysis::{Analysis, Step};
-use crate::assembly::{DofMap, ExtraTerms, NO_EQ, Pattern, assemble};
+use crate::assembly::{AssemblyError, DofMap, ExtraTerms, NO_EQ, Pattern, assemble};
 use crate::follower;
 use crate::linsolve::LinearSolver;
 
@@ -39,6 +42,9 @@ pub struct Converged {
     pub iterations: usize,
     /// Last factorization method.
     pub method: &'static str,
+    /// Notes of the extra terms per assembly (see
+    /// [`ExtraTerms::iteration_note`]), empty if it has none.
+    pub notes: Vec<String>,
 }
 
 /// Why an increment failed.
@@ -74,8 +80,6 @@ pub struct IncrementProblem<'a> {
     pub dm: &'a DofMap,
     /// Sparsity pattern.
     pub pat: &'a Pattern,
-    /// Extra terms.
-    pub extra: &'a dyn ExtraTerms,
     /// Step controls.
     pub step: &'a Step,
     /// External forces over global DOFs at the increment's end.
@@ -86,23 +90,27 @@ pub struct IncrementProblem<'a> {
     pub follower: &'a [(usize, f64)],
 }
 
-/// Solves one increment starting from the committed `u0`.
+/// Solves one increment from the committed `u0`, iterating from `start` (`u0`, or the converged
+/// state of a previous solve of the same increment in an outer loop); the correction test measures
+/// `Δu` from `u0`.
 ///
 /// # Errors
 /// A [`Failure`]; the caller keeps its committed state.
 pub fn solve_increment(
     p: &IncrementProblem<'_>,
+    extra: &mut dyn ExtraTerms,
     u0: &[f64],
+    start: &[f64],
     solver: &mut LinearSolver,
 ) -> Result<Converged, Failure> {
     let (an, dm) = (p.an, p.dm);
     let nlgeom = p.step.nlgeom;
-    let symmetric = p.extra.symmetric() && p.follower.is_empty();
-    let reuse = p.extra.num_extra() == 0;
-    let mut u = u0.to_vec();
+    let symmetric = extra.symmetric() && p.follower.is_empty();
+    let reuse = !extra.nonlinear();
+    let mut u = start.to_vec();
     let mut dup = vec![0.0; u.len()];
     for &(dof, v) in p.prescribed {
-        dup[dof] = v - u0[dof];
+        dup[dof] = v - start[dof];
     }
     let fext_norm = norm(
         (0..dm.eq.len())
@@ -117,10 +125,11 @@ pub fn solve_increment(
     let mut method = "none";
     let mut iterations = 0usize;
     let mut predictor = true;
+    let mut notes = Vec::new();
     // Small strain without extra or follower terms: the tangent is constant,
     // so the prescribed values are applied directly (the residual then
     // contains `K_fp Δu_p` exactly) and one factorization serves the step.
-    let constant_tangent = !nlgeom && p.extra.num_extra() == 0 && p.follower.is_empty();
+    let constant_tangent = !nlgeom && !extra.nonlinear() && p.follower.is_empty();
     if constant_tangent {
         for &(dof, v) in p.prescribed {
             u[dof] = v;
@@ -137,9 +146,15 @@ pub fn solve_increment(
             nlgeom,
             need_tangent,
             (predictor && !constant_tangent).then_some(dup.as_slice()),
-            p.extra,
+            extra,
         )
-        .map_err(|e| inverted(e.0))?;
+        .map_err(|e| match e {
+            AssemblyError::Inverted(i) => inverted(i),
+            AssemblyError::Extra(m) => Failure::Diverged(m),
+        })?;
+        if let Some(n) = extra.iteration_note() {
+            notes.push(n);
+        }
         let mut asm = asm;
         if !p.follower.is_empty() {
             let mut trip = Vec::new();
@@ -204,6 +219,7 @@ pub fn solve_increment(
                     reference,
                     iterations,
                     method,
+                    notes,
                 });
             }
             if rnorm > 1e6 * reference {
@@ -226,6 +242,7 @@ pub fn solve_increment(
                 reference,
                 iterations,
                 method,
+                notes,
             });
         }
         if !reuse {

@@ -8,7 +8,9 @@
 //!   rewritten after each `.vtu` so ParaView can open a running job;
 //! * `history.csv`: one row per converged increment: step, name, increment,
 //!   load factor, time, iterations, final residual norm and relative
-//!   residual, then `Rx, Ry, Rz` summed over each boundary group.
+//!   residual, then `Rx, Ry, Rz` summed over each boundary group, then the
+//!   columns of the extra terms (contact: see [`crate::contact`]);
+//! * extra point fields of the extra terms (contact) in every `.vtu`.
 //!
 //! `.vtu` files of an earlier run of the same model in the folder are
 //! removed first, so the folder always matches the `.pvd`.
@@ -52,6 +54,7 @@ pub struct ResultWriter {
     cells: Vec<(u8, Vec<usize>)>,
     pvd: Vec<(f64, String)>,
     history: String,
+    header_done: bool,
     /// Paths written so far.
     pub written: Vec<PathBuf>,
 }
@@ -88,13 +91,13 @@ impl ResultWriter {
             };
             let _ = write!(history, ",{0}_Rx,{0}_Ry,{0}_Rz", name);
         }
-        history.push('\n');
         Ok(Self {
             dir: dir.to_path_buf(),
             stem: stem.to_string(),
             cells,
             pvd: Vec::new(),
             history,
+            header_done: false,
             written: Vec::new(),
         })
     }
@@ -104,6 +107,14 @@ impl ResultWriter {
     /// # Errors
     /// I/O errors.
     pub fn write(&mut self, an: &Analysis, info: &IncrementInfo<'_>) -> Result<()> {
+        if !self.header_done {
+            // Extra columns (contact) are known from the first increment on.
+            for (name, _) in info.history {
+                let _ = write!(self.history, ",{name}");
+            }
+            self.history.push('\n');
+            self.header_done = true;
+        }
         let last = info.residuals.last().copied().unwrap_or(0.0);
         let _ = write!(
             self.history,
@@ -124,6 +135,9 @@ impl ResultWriter {
         for r in boundary_reactions(an, info.reactions) {
             let _ = write!(self.history, ",{:e},{:e},{:e}", r[0], r[1], r[2]);
         }
+        for (_, v) in info.history {
+            let _ = write!(self.history, ",{v:e}");
+        }
         self.history.push('\n');
         if an.output.history {
             let p = self.dir.join("history.csv");
@@ -143,31 +157,39 @@ impl ResultWriter {
             let n = an.mesh.nodes.len();
             let fields = stress_fields(an, info.u, info.nlgeom);
             let material: Vec<f64> = an.body.iter().map(|b| b.material as f64).collect();
+            let mut point_data = vec![
+                Field {
+                    name: "displacement",
+                    components: 3,
+                    values: &info.u[..3 * n],
+                },
+                Field {
+                    name: "reaction",
+                    components: 3,
+                    values: &info.reactions[..3 * n],
+                },
+                Field {
+                    name: "stress",
+                    components: 6,
+                    values: &fields.point_stress,
+                },
+                Field {
+                    name: "von_mises",
+                    components: 1,
+                    values: &fields.point_von_mises,
+                },
+            ];
+            for (name, components, values) in info.point_fields {
+                point_data.push(Field {
+                    name,
+                    components: *components,
+                    values,
+                });
+            }
             let grid = Grid {
                 points: &an.mesh.nodes,
                 cells: &self.cells,
-                point_data: vec![
-                    Field {
-                        name: "displacement",
-                        components: 3,
-                        values: &info.u[..3 * n],
-                    },
-                    Field {
-                        name: "reaction",
-                        components: 3,
-                        values: &info.reactions[..3 * n],
-                    },
-                    Field {
-                        name: "stress",
-                        components: 6,
-                        values: &fields.point_stress,
-                    },
-                    Field {
-                        name: "von_mises",
-                        components: 1,
-                        values: &fields.point_von_mises,
-                    },
-                ],
+                point_data,
                 cell_data: vec![
                     Field {
                         name: "stress",

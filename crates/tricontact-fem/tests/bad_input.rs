@@ -122,7 +122,7 @@ fn unsupported_element_type_is_named() {
 fn body_without_supports_is_reported_singular() {
     let p = setup("free", &msh(4, &TET), &model_text("solid", ""));
     let an: Analysis = load_analysis(&p).expect("valid model");
-    let e = driver::run(&an, &NoExtra, &mut |_| Ok(())).expect_err("singular");
+    let e = driver::run(&an, &mut NoExtra, &mut |_| Ok(())).expect_err("singular");
     assert!(matches!(e, FemError::Singular(_)), "{e}");
     assert!(
         e.to_string().contains("6 unconstrained rigid-body mode"),
@@ -141,7 +141,7 @@ fn body_without_supports_is_reported_singular() {
         values: [Some(0.0); 3],
         active: vec![true],
     });
-    let e = driver::run(&an, &NoExtra, &mut |_| Ok(())).expect_err("singular");
+    let e = driver::run(&an, &mut NoExtra, &mut |_| Ok(())).expect_err("singular");
     assert!(
         e.to_string().contains("3 unconstrained rigid-body mode"),
         "{e}"

@@ -199,8 +199,9 @@ fn exhausted_cutbacks_are_reported() {
         1.5,
         "nlgeom = true\nincrements = 1\nmax_iterations = 3\nmax_cutbacks = 1",
     );
-    let e = tricontact_fem::driver::run(&an, &tricontact_fem::assembly::NoExtra, &mut |_| Ok(()))
-        .expect_err("must fail");
+    let e =
+        tricontact_fem::driver::run(&an, &mut tricontact_fem::assembly::NoExtra, &mut |_| Ok(()))
+            .expect_err("must fail");
     let msg = e.to_string();
     assert!(
         matches!(e, tricontact_fem::FemError::NotConverged { .. }),

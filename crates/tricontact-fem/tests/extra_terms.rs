@@ -26,11 +26,17 @@ impl ExtraTerms for TipConstraint {
     fn symmetric(&self) -> bool {
         false
     }
-    fn add_terms(&self, u: &[f64], residual: &mut [f64], triplets: &mut Vec<(usize, usize, f64)>) {
+    fn add_terms(
+        &mut self,
+        u: &[f64],
+        residual: &mut [f64],
+        triplets: &mut Vec<(usize, usize, f64)>,
+    ) -> Result<(), String> {
         residual[self.dof] += u[self.lambda_dof];
         residual[self.lambda_dof] += u[self.dof] - self.value;
         triplets.push((self.dof, self.lambda_dof, 1.0));
         triplets.push((self.lambda_dof, self.dof, 1.0));
+        Ok(())
     }
 }
 
@@ -64,14 +70,14 @@ fn multiplier_constraint_matches_prescribed_displacement() {
     let value = -0.5;
     let an = common::analysis(mesh.clone(), MODEL);
     let n = an.num_nodal_dofs();
-    let extra = TipConstraint {
+    let mut extra = TipConstraint {
         dof: 3 * tip + 1,
         lambda_dof: n,
         value,
     };
     let mut u_mult = Vec::new();
     let mut methods = Vec::new();
-    run(&an, &extra, &mut |info| {
+    run(&an, &mut extra, &mut |info| {
         u_mult = info.u.to_vec();
         methods.push(info.method.to_string());
         Ok(())

@@ -70,7 +70,7 @@ fn every_vtu_and_history_switches() {
     std::fs::write(dir.join("m_001_0007.vtu"), "old").expect("write");
     std::fs::write(dir.join("notes_001_0007.vtu"), "keep").expect("write");
     let mut w = ResultWriter::new(&an, &dir, "m").expect("writer");
-    run(&an, &NoExtra, &mut |info| w.write(&an, info)).expect("run");
+    run(&an, &mut NoExtra, &mut |info| w.write(&an, info)).expect("run");
     std::fs::remove_file(dir.join("notes_001_0007.vtu")).expect("unrelated file kept");
     let mut names: Vec<String> = std::fs::read_dir(&dir)
         .expect("dir")
@@ -90,7 +90,7 @@ fn every_vtu_and_history_switches() {
     let dir2 = dir.with_extension("none");
     let _ = std::fs::remove_dir_all(&dir2);
     let mut w = ResultWriter::new(&an2, &dir2, "m").expect("writer");
-    run(&an2, &NoExtra, &mut |info| w.write(&an2, info)).expect("run");
+    run(&an2, &mut NoExtra, &mut |info| w.write(&an2, info)).expect("run");
     assert_eq!(std::fs::read_dir(&dir2).expect("dir").count(), 0);
     let _ = std::fs::remove_dir_all(&dir);
     let _ = std::fs::remove_dir_all(&dir2);

@@ -120,7 +120,7 @@ nlgeom = true
     let pat = Pattern::new(&an, &dm);
     let r = pseudo_random(3, an.num_nodal_dofs());
     let u: Vec<f64> = r.iter().map(|v| 0.04 * v).collect();
-    let asm = assemble(&an, &dm, &pat, &u, true, true, None, &NoExtra).expect("admissible");
+    let asm = assemble(&an, &dm, &pat, &u, true, true, None, &mut NoExtra).expect("admissible");
     let k = asm.matrix(&pat);
     let kmax = asm.values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let h = 1e-6;
@@ -136,10 +136,10 @@ nlgeom = true
         let mut um = u.clone();
         up[dof] += h;
         um[dof] -= h;
-        let rp = assemble(&an, &dm, &pat, &up, true, false, None, &NoExtra)
+        let rp = assemble(&an, &dm, &pat, &up, true, false, None, &mut NoExtra)
             .expect("ok")
             .residual;
-        let rm = assemble(&an, &dm, &pat, &um, true, false, None, &NoExtra)
+        let rm = assemble(&an, &dm, &pat, &um, true, false, None, &mut NoExtra)
             .expect("ok")
             .residual;
         let mut dense_col = vec![0.0; dm.n_eq];

@@ -86,10 +86,10 @@ fn main() {
     let t_pattern = t.elapsed();
     let u = vec![0.0; an.num_nodal_dofs()];
     let t = Instant::now();
-    let asm = match assemble(&an, &dm, &pat, &u, false, true, None, &NoExtra) {
+    let asm = match assemble(&an, &dm, &pat, &u, false, true, None, &mut NoExtra) {
         Ok(a) => a,
         Err(e) => {
-            eprintln!("error: inverted element {}", e.0);
+            eprintln!("error: assembly failed: {e:?}");
             std::process::exit(1);
         }
     };

@@ -33,7 +33,7 @@ pub struct Record {
 /// Runs the analysis and records every increment.
 pub fn solve(an: &Analysis) -> (RunSummary, Vec<Record>) {
     let mut records = Vec::new();
-    let summary = run(an, &NoExtra, &mut |info| {
+    let summary = run(an, &mut NoExtra, &mut |info| {
         records.push(Record {
             step: info.step,
             increment: info.increment,
@@ -72,4 +72,63 @@ pub fn box_boundary_nodes(mesh: &Mesh, size: [f64; 3]) -> Vec<usize> {
             (0..3).any(|i| p[i].abs() < 1e-12 * size[i] || (p[i] - size[i]).abs() < 1e-12 * size[i])
         })
         .collect()
+}
+
+/// Two meshes in one: node and element indices of `upper` shifted, its node coordinates moved
+/// by `offset`, groups renamed `lower_<name>` and `upper_<name>`.
+pub fn stack(lower: &Mesh, upper: &Mesh, offset: [f64; 3]) -> Mesh {
+    let mut m = lower.clone();
+    let (nn, ne) = (lower.nodes.len(), lower.elements.len());
+    for g in &mut m.groups {
+        g.name = format!("lower_{}", g.name);
+    }
+    for p in &upper.nodes {
+        m.nodes
+            .push([p[0] + offset[0], p[1] + offset[1], p[2] + offset[2]]);
+    }
+    m.node_tags = (1..=m.nodes.len() as u64).collect();
+    let tag0 = lower.elements.len() as u64;
+    for e in &upper.elements {
+        let mut e = e.clone();
+        e.nodes.iter_mut().for_each(|a| *a += nn);
+        e.tag += tag0;
+        m.elements.push(e);
+    }
+    for g in &upper.groups {
+        let mut g = g.clone();
+        g.name = format!("upper_{}", g.name);
+        g.elements.iter_mut().for_each(|e| *e += ne);
+        g.nodes.iter_mut().for_each(|a| *a += nn);
+        m.groups.push(g);
+    }
+    m
+}
+
+/// Runs with the model's contact pairs; returns the contact terms at the end and the records.
+pub fn solve_contact(
+    an: &Analysis,
+) -> (
+    tricontact_fem::contact::ContactTerms,
+    Vec<Record>,
+    Vec<Vec<String>>,
+) {
+    let mut terms = tricontact_fem::contact::ContactTerms::new(an);
+    let mut records = Vec::new();
+    let mut notes = Vec::new();
+    run(an, &mut terms, &mut |info| {
+        records.push(Record {
+            step: info.step,
+            increment: info.increment,
+            load_factor: info.load_factor,
+            iterations: info.iterations,
+            residuals: info.residuals.to_vec(),
+            reference: info.reference,
+            reactions: boundary_reactions(an, info.reactions),
+            u: info.u.to_vec(),
+        });
+        notes.push(info.notes.to_vec());
+        Ok(())
+    })
+    .expect("run succeeds");
+    (terms, records, notes)
 }

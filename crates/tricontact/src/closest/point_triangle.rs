@@ -78,18 +78,43 @@ pub fn closest_point_on_triangle(a: &Vec3, b: &Vec3, c: &Vec3, p: &Vec3) -> Clos
 }
 
 /// The Voronoi region of `p` and the barycentric coordinates of its closest point.
+///
+/// The region tests use products of four lengths, which overflow (or underflow to `0/0`) for
+/// extreme coordinates; the barycentric coordinates are invariant under scaling, so such a case is
+/// recomputed on the relative vectors scaled to unit size.
 #[inline]
 fn region(a: &Vec3, b: &Vec3, c: &Vec3, p: &Vec3) -> (Feature, [f64; 3]) {
-    let (ab, ac) = (b - a, c - a);
-    let (d1, d2) = (ab.dot(&(p - a)), ac.dot(&(p - a)));
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let r = region_relative(&ab, &ac, &ap);
+    if r.1.iter().all(|v| v.is_finite()) {
+        return r;
+    }
+    let scale = ab.amax().max(ac.amax()).max(ap.amax());
+    if !(scale.is_finite() && scale > 0.0) {
+        return (Feature::Vertex(0), [1.0, 0.0, 0.0]);
+    }
+    let (ab, ac, ap) = (ab / scale, ac / scale, ap / scale);
+    let r = region_relative(&ab, &ac, &ap);
+    if r.1.iter().all(|v| v.is_finite()) {
+        r
+    } else {
+        (Feature::Vertex(0), [1.0, 0.0, 0.0])
+    }
+}
+
+/// [`region`] on `ab = b − a`, `ac = c − a`, `ap = p − a`.
+#[inline]
+fn region_relative(ab: &Vec3, ac: &Vec3, ap: &Vec3) -> (Feature, [f64; 3]) {
+    let (bp, cp) = (ap - ab, ap - ac);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
     if d1 <= 0.0 && d2 <= 0.0 {
         return (Feature::Vertex(0), [1.0, 0.0, 0.0]);
     }
-    let (d3, d4) = (ab.dot(&(p - b)), ac.dot(&(p - b)));
+    let (d3, d4) = (ab.dot(&bp), ac.dot(&bp));
     if d3 >= 0.0 && d4 <= d3 {
         return (Feature::Vertex(1), [0.0, 1.0, 0.0]);
     }
-    let (d5, d6) = (ab.dot(&(p - c)), ac.dot(&(p - c)));
+    let (d5, d6) = (ab.dot(&cp), ac.dot(&cp));
     if d6 >= 0.0 && d5 <= d6 {
         return (Feature::Vertex(2), [0.0, 0.0, 1.0]);
     }

@@ -1,0 +1,479 @@
+//! Frictionless node-to-facet contact in the solver: the `[[contact]]` pairs as [`ExtraTerms`].
+//!
+//! # Per evaluation (every Newton iteration)
+//! Positions are always current, `x = X + u` (small-strain solids included). For every pair and
+//! pass, the master surface's tree is built at `x` and each slave node gets **one** constraint: the
+//! facet of [`tricontact::contact::choose_facet`] (among facets within the longest master edge the
+//! node projects into, smallest `|P|`, ties to the lowest index), or with `small_sliding` the facet,
+//! shape functions and normal frozen at the start of the increment (see [`gap`]). Hysteresis: a
+//! node keeps its previous facet while it projects into it within [`HYSTERESIS`] and its `|P|`
+//! there exceeds the chosen one's by at most `HYSTERESIS · h` (no flip-flopping across an edge,
+//! where `∇²P` jumps, from round-off). The node's terms
+//! ([`penalty`], [`multiplier`], [`augmented`]) are scattered to global DOFs `3·node + d`;
+//! multipliers are extra unknowns after the nodal DOFs, one per slave node of each multiplier pair.
+//!
+//! Sign conventions (the kernel's): `P > 0` open, `P < 0` penetrating; the constraint enters as
+//! `Π + λP`, compression is `λ ≤ 0`, the contact force on the slave node is `−λW`.
+//!
+//! # Active set and outer loops
+//! * Multiplier: the switch of [`multiplier`] is re-evaluated every iteration (primal–dual active
+//!   set). A node changing status more than [`MAX_SWITCHES`] times in an increment is frozen in its
+//!   current status for the rest of the increment (cycling), and counted in the iteration log.
+//! * Augmented Lagrangian: after Newton converged, if the largest penetration exceeds the pair's
+//!   tolerance, every node's estimate takes the Uzawa update `λ_k ← min(0, λ_k + αP)` and the
+//!   increment is solved again (outer loop of [`crate::driver`]).
+//! * Facet cycling: a node sitting in a concave kink of the master (a valley, e.g. the bottom of
+//!   an indentation) has no single-facet equilibrium and flips between the flanks. After
+//!   [`MAX_SWITCHES`] facet changes in an increment its facet is frozen (its plane extended) for
+//!   the rest of the increment, and counted as frozen in the iteration log. A node in no facet's
+//!   projection region keeps its previous facet while its foot is within [`LOST_TOLERANCE`] of it
+//!   and it penetrates.
+//! * The node states (facet, shape functions, normal, multiplier estimate, status) are committed at
+//!   convergence and restored on a cutback.
+
+pub mod augmented;
+pub mod gap;
+pub mod multiplier;
+pub mod output;
+pub mod pair;
+pub mod penalty;
+pub mod state;
+
+use tricontact::Vec3;
+use tricontact::contact::choose_facet;
+use tricontact::search::Bvh;
+
+use crate::analysis::Analysis;
+use crate::assembly::ExtraTerms;
+use crate::model::ContactMethod;
+use gap::Gap;
+pub use pair::ContactPair;
+use state::NodeState;
+
+/// Tolerance of the facet hysteresis (see [`ContactTerms`]'s evaluation): barycentric, and
+/// relative to the mean facet size for the gap.
+pub const HYSTERESIS: f64 = 1e-6;
+
+/// How far (barycentric) a node in no facet's projection region (below a concave kink) may be
+/// outside its previous facet and keep it.
+pub const LOST_TOLERANCE: f64 = 0.1;
+
+/// Status changes of a node within one increment before its status is frozen.
+pub const MAX_SWITCHES: u32 = 4;
+
+/// The contact pairs of an analysis with their state.
+#[derive(Clone, Debug)]
+pub struct ContactTerms {
+    reference: Vec<[f64; 3]>,
+    pairs: Vec<ContactPair>,
+    /// Offset of each pair's multipliers among the extra unknowns.
+    offsets: Vec<usize>,
+    n_extra: usize,
+    committed: Vec<Vec<Vec<NodeState>>>,
+    trial: Vec<Vec<Vec<NodeState>>>,
+    committed_force: Vec<f64>,
+    trial_force: Vec<f64>,
+    areas: Vec<f64>,
+    note: Option<String>,
+}
+
+impl ContactTerms {
+    /// The contact terms of `an`'s pairs, all nodes open.
+    #[must_use]
+    pub fn new(an: &Analysis) -> Self {
+        let pairs = an.contacts.clone();
+        let mut offsets = Vec::new();
+        let mut n_extra = 0;
+        for p in &pairs {
+            offsets.push(n_extra);
+            if p.method == ContactMethod::Multiplier {
+                n_extra += p.passes[0].slaves.len();
+            }
+        }
+        let state: Vec<Vec<Vec<NodeState>>> = pairs
+            .iter()
+            .map(|p| {
+                p.passes
+                    .iter()
+                    .map(|q| vec![NodeState::default(); q.slaves.len()])
+                    .collect()
+            })
+            .collect();
+        let n = an.mesh.nodes.len();
+        let mut areas = vec![0.0; n];
+        for p in &pairs {
+            for q in &p.passes {
+                for (&s, &a) in q.slaves.iter().zip(&q.areas) {
+                    areas[s] = a;
+                }
+            }
+        }
+        Self {
+            reference: an.mesh.nodes.clone(),
+            pairs,
+            offsets,
+            n_extra,
+            committed: state.clone(),
+            trial: state,
+            committed_force: vec![0.0; 3 * n],
+            trial_force: vec![0.0; 3 * n],
+            areas,
+            note: None,
+        }
+    }
+
+    /// The resolved pairs.
+    #[must_use]
+    pub fn pairs(&self) -> &[ContactPair] {
+        &self.pairs
+    }
+
+    /// Committed node states: `[pair][pass][slave]`.
+    #[must_use]
+    pub fn states(&self) -> &[Vec<Vec<NodeState>>] {
+        &self.committed
+    }
+
+    /// Committed contact force over nodal DOFs.
+    #[must_use]
+    pub fn forces(&self) -> &[f64] {
+        &self.committed_force
+    }
+
+    fn positions(&self, u: &[f64]) -> Vec<Vec3> {
+        self.reference
+            .iter()
+            .enumerate()
+            .map(|(a, p)| Vec3::new(p[0] + u[3 * a], p[1] + u[3 * a + 1], p[2] + u[3 * a + 2]))
+            .collect()
+    }
+
+    /// The gap of slave `j` of pass `q` of pair `p` at `x`, with the facet's nodes.
+    fn evaluate(
+        &self,
+        p: usize,
+        q: usize,
+        j: usize,
+        x: &[Vec3],
+        bvh: Option<&Bvh>,
+    ) -> Option<(u32, [usize; 3], Gap)> {
+        let pass = &self.pairs[p].passes[q];
+        let s = pass.slaves[j];
+        let nodes_of = |f: u32| pass.surface.facets()[f as usize].map(|a| a as usize);
+        if let Some(bvh) = bvh {
+            let st = &self.trial[p][q][j];
+            let previous = st
+                .facet
+                .filter(|&f| (f as usize) < pass.surface.len())
+                .and_then(|f| {
+                    let nodes = nodes_of(f);
+                    tricontact::NodeFacet::new(x[nodes[0]], x[nodes[1]], x[nodes[2]], x[s])
+                        .ok()
+                        .map(|pair| (f, nodes, pair))
+                });
+            // Facet frozen after cycling: its plane (extended) for the rest of the increment.
+            if st.facet_frozen
+                && let Some((f, nodes, pair)) = previous
+            {
+                return Some((f, nodes, Gap::Finite(pair)));
+            }
+            let Some((f, pair)) =
+                choose_facet(&pass.surface, bvh, x, u32::try_from(s).ok()?, pass.radius)
+            else {
+                // In no facet's projection region (below a valley): the previous facet's plane
+                // while the foot stays within LOST_TOLERANCE of it.
+                return previous
+                    .filter(|(_, _, pair)| {
+                        pair.projection.is_inside(LOST_TOLERANCE) && pair.gap() <= 0.0
+                    })
+                    .map(|(f, nodes, pair)| (f, nodes, Gap::Finite(pair)));
+            };
+            // Hysteresis: keep the previous facet while the node still projects into it within
+            // HYSTERESIS (barycentric) and its |P| is not larger than the chosen one's by more
+            // than HYSTERESIS·h. A node on a shared edge or vertex otherwise flips between facets
+            // from one iteration to the next, and with it the Hessian term `λ∇²P` of the tangent
+            // (it jumps across edges): Newton then cycles instead of converging.
+            if let Some((prev, nodes, old)) = previous
+                && prev != f
+                && old.projection.is_inside(HYSTERESIS)
+                && old.gap().abs() <= pair.gap().abs() + HYSTERESIS * self.pairs[p].facet_size
+            {
+                return Some((prev, nodes, Gap::Finite(old)));
+            }
+            Some((f, nodes_of(f), Gap::Finite(pair)))
+        } else {
+            let (f, shape, normal) = self.trial[p][q][j].start?;
+            let nodes = nodes_of(f);
+            let xf = nodes.map(|a| x[a]);
+            let w = Vec3::new(normal[0], normal[1], normal[2]);
+            Some((f, nodes, Gap::linear(xf, x[s], shape, w)))
+        }
+    }
+}
+
+fn scatter(
+    nodes: [usize; 4],
+    r: &tricontact::Vec12,
+    k: &tricontact::Mat12,
+    residual: &mut [f64],
+    force: &mut [f64],
+    triplets: &mut Vec<(usize, usize, f64)>,
+) {
+    let dof = |i: usize| 3 * nodes[i / 3] + i % 3;
+    for i in 0..12 {
+        residual[dof(i)] += r[i];
+        force[dof(i)] -= r[i];
+        for j in 0..12 {
+            let v = k[(i, j)];
+            if v != 0.0 {
+                triplets.push((dof(i), dof(j), v));
+            }
+        }
+    }
+}
+
+impl ExtraTerms for ContactTerms {
+    fn num_extra(&self) -> usize {
+        self.n_extra
+    }
+
+    fn symmetric(&self) -> bool {
+        self.n_extra == 0
+    }
+
+    fn nonlinear(&self) -> bool {
+        !self.pairs.is_empty()
+    }
+
+    fn supports_bodies(&self) -> bool {
+        !self.pairs.is_empty()
+    }
+
+    fn begin_increment(&mut self, u: &[f64]) -> Result<(), String> {
+        self.trial.clone_from(&self.committed);
+        for st in self.trial.iter_mut().flatten().flatten() {
+            st.switches = 0;
+            st.frozen = None;
+            st.facet_switches = 0;
+            st.facet_frozen = false;
+        }
+        let x = self.positions(u);
+        for p in 0..self.pairs.len() {
+            if !self.pairs[p].small_sliding {
+                continue;
+            }
+            for q in 0..self.pairs[p].passes.len() {
+                let pass = &self.pairs[p].passes[q];
+                let bvh = Bvh::build(&pass.surface, &x, pass.radius).map_err(|e| e.to_string())?;
+                for j in 0..pass.slaves.len() {
+                    let start = self.evaluate(p, q, j, &x, Some(&bvh)).map(|(f, _, g)| {
+                        let w = g.normal();
+                        (f, g.shape(), [w[0], w[1], w[2]])
+                    });
+                    self.trial[p][q][j].start = start;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn add_terms(
+        &mut self,
+        u: &[f64],
+        residual: &mut [f64],
+        triplets: &mut Vec<(usize, usize, f64)>,
+    ) -> Result<(), String> {
+        let x = self.positions(u);
+        let n_nodal = 3 * self.reference.len();
+        let mut force = vec![0.0; n_nodal];
+        let (mut active_count, mut changed, mut frozen, mut moved) =
+            (0usize, 0usize, 0usize, 0usize);
+        for p in 0..self.pairs.len() {
+            let (method, alpha, small) = {
+                let pr = &self.pairs[p];
+                (pr.method, pr.penalty, pr.small_sliding)
+            };
+            for q in 0..self.pairs[p].passes.len() {
+                let bvh = if small {
+                    None
+                } else {
+                    let pass = &self.pairs[p].passes[q];
+                    Some(Bvh::build(&pass.surface, &x, pass.radius).map_err(|e| e.to_string())?)
+                };
+                for j in 0..self.pairs[p].passes[q].slaves.len() {
+                    let s = self.pairs[p].passes[q].slaves[j];
+                    let eval = self.evaluate(p, q, j, &x, bvh.as_ref());
+                    let st = &mut self.trial[p][q][j];
+                    let was_active = st.active;
+                    if eval.as_ref().map(|e| e.0) != st.facet {
+                        moved += 1;
+                        if st.facet.is_some() && eval.is_some() {
+                            st.facet_switches += 1;
+                            if st.facet_switches > MAX_SWITCHES {
+                                st.facet_frozen = true;
+                            }
+                        }
+                    }
+                    if st.facet_frozen {
+                        frozen += 1;
+                    }
+                    match &eval {
+                        Some((f, _, g)) => {
+                            let w = g.normal();
+                            st.facet = Some(*f);
+                            st.shape = g.shape();
+                            st.normal = [w[0], w[1], w[2]];
+                            st.gap = g.gap();
+                        }
+                        None => {
+                            st.facet = None;
+                            st.gap = 0.0;
+                        }
+                    }
+                    let geometry = |e: tricontact::GeometryError| format!("contact: {e}");
+                    match method {
+                        ContactMethod::Penalty => {
+                            st.active = false;
+                            st.lambda = 0.0;
+                            if let Some((_, fnodes, g)) = &eval
+                                && let Some((r, k)) =
+                                    penalty::penalty_terms(g, alpha).map_err(geometry)?
+                            {
+                                st.active = true;
+                                st.lambda = alpha * g.gap();
+                                let nodes = [fnodes[0], fnodes[1], fnodes[2], s];
+                                scatter(nodes, &r, &k, residual, &mut force, triplets);
+                            }
+                        }
+                        ContactMethod::Augmented => {
+                            st.active = false;
+                            st.lambda = 0.0;
+                            if let Some((_, fnodes, g)) = &eval {
+                                let (lh, terms) = augmented::augmented_terms(g, st.lambda_k, alpha)
+                                    .map_err(geometry)?;
+                                if let Some((r, k)) = terms {
+                                    st.active = true;
+                                    st.lambda = lh;
+                                    let nodes = [fnodes[0], fnodes[1], fnodes[2], s];
+                                    scatter(nodes, &r, &k, residual, &mut force, triplets);
+                                }
+                            }
+                        }
+                        ContactMethod::Multiplier => {
+                            let ldof = n_nodal + self.offsets[p] + j;
+                            let lambda = u[ldof];
+                            let want = eval.as_ref().is_some_and(|(_, _, g)| {
+                                multiplier::wants_active(g.gap(), lambda, alpha)
+                            });
+                            let act = match st.frozen {
+                                Some(f) => f && eval.is_some(),
+                                None => {
+                                    if want != was_active {
+                                        st.switches += 1;
+                                        if st.switches > MAX_SWITCHES {
+                                            st.frozen = Some(want);
+                                        }
+                                    }
+                                    want
+                                }
+                            };
+                            if st.frozen.is_some() {
+                                frozen += 1;
+                            }
+                            st.active = act;
+                            st.lambda = if act { lambda } else { 0.0 };
+                            let block = match &eval {
+                                Some((_, _, g)) if act => {
+                                    multiplier::active_block(g, lambda).map_err(geometry)?
+                                }
+                                _ => multiplier::inactive_block(lambda, alpha),
+                            };
+                            if let Some((_, fnodes, _)) = &eval
+                                && act
+                            {
+                                let nodes = [fnodes[0], fnodes[1], fnodes[2], s];
+                                scatter(
+                                    nodes,
+                                    &block.residual_u,
+                                    &block.k_uu,
+                                    residual,
+                                    &mut force,
+                                    triplets,
+                                );
+                                for i in 0..12 {
+                                    let d = 3 * nodes[i / 3] + i % 3;
+                                    triplets.push((d, ldof, block.k_ulambda[i]));
+                                    triplets.push((ldof, d, block.k_ulambda[i]));
+                                }
+                            }
+                            residual[ldof] += block.residual_lambda;
+                            triplets.push((ldof, ldof, block.k_lambdalambda));
+                        }
+                    }
+                    if st.active {
+                        active_count += 1;
+                    }
+                    if st.active != was_active {
+                        changed += 1;
+                    }
+                }
+            }
+        }
+        self.trial_force = force;
+        self.note = Some(if frozen > 0 {
+            format!(
+                "contact: {active_count} closed, {changed} changed, {moved} changed facet, {frozen} frozen (cycling)"
+            )
+        } else {
+            format!("contact: {active_count} closed, {changed} changed, {moved} changed facet")
+        });
+        Ok(())
+    }
+
+    fn iteration_note(&self) -> Option<String> {
+        self.note.clone()
+    }
+
+    fn after_converged(&mut self, _u: &[f64]) -> Result<bool, String> {
+        let mut done = true;
+        for (p, pair) in self.pairs.iter().enumerate() {
+            if pair.method != ContactMethod::Augmented {
+                continue;
+            }
+            let largest = self.trial[p]
+                .iter()
+                .flatten()
+                .filter(|s| s.active)
+                .fold(0.0f64, |m, s| m.max(-s.gap));
+            if largest > pair.tolerance {
+                done = false;
+                for st in self.trial[p].iter_mut().flatten() {
+                    st.lambda_k = if st.active { st.lambda.min(0.0) } else { 0.0 };
+                }
+            }
+        }
+        Ok(done)
+    }
+
+    fn commit(&mut self) {
+        self.committed.clone_from(&self.trial);
+        self.committed_force.clone_from(&self.trial_force);
+    }
+
+    fn restore(&mut self) {
+        self.trial.clone_from(&self.committed);
+        self.trial_force.clone_from(&self.committed_force);
+    }
+
+    fn point_fields(&self) -> Vec<(String, usize, Vec<f64>)> {
+        if self.pairs.is_empty() {
+            Vec::new()
+        } else {
+            self.fields()
+        }
+    }
+
+    fn history(&self) -> Vec<(String, f64)> {
+        self.columns()
+    }
+}

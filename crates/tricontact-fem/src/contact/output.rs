@@ -1,0 +1,82 @@
+//! Contact result fields and history columns.
+//!
+//! Point fields (over all mesh nodes, zero where a node is not in contact — no sentinels):
+//! * `contact_force`: contact force on the node (3 components), `−` the contact part of the
+//!   internal force: `−λW` on a slave node, `λ N_a W` on the facet nodes;
+//! * `contact_pressure`: `|contact_force| / A` with `A = ∫N_a dA` the node's lumped area on its
+//!   contact surface (0 for nodes without area);
+//! * `contact_gap`: the slave node's gap `P` (first pass; 0 without facet);
+//! * `contact_status`: 1 closed, 0 open (slave nodes);
+//! * `contact_facet`: Gmsh tag of the master face a closed slave node is on (0 when open).
+//!
+//! History columns per pair `<slave>-<master>`: `_normal_force` (`Σ −λ` over all slave nodes and
+//! passes), `_active` (closed nodes), `_max_penetration` (`max(0, −P)` over closed nodes), `_area`
+//! (lumped area of the closed nodes).
+
+use super::ContactTerms;
+
+impl ContactTerms {
+    /// The point fields at the committed state.
+    #[must_use]
+    pub fn fields(&self) -> Vec<(String, usize, Vec<f64>)> {
+        let n = self.reference.len();
+        let mut gap = vec![0.0; n];
+        let mut status = vec![0.0; n];
+        let mut facet = vec![0.0; n];
+        let mut pressure = vec![0.0; n];
+        for (p, pair) in self.pairs.iter().enumerate() {
+            for (q, pass) in pair.passes.iter().enumerate() {
+                for (j, &s) in pass.slaves.iter().enumerate() {
+                    let st = &self.committed[p][q][j];
+                    if q == 0 {
+                        gap[s] = st.gap;
+                    }
+                    if st.active {
+                        status[s] = 1.0;
+                        if q == 0 {
+                            facet[s] = st.facet.map_or(0.0, |f| pass.face_tags[f as usize] as f64);
+                        }
+                    }
+                }
+            }
+        }
+        for a in 0..n {
+            let f = &self.committed_force[3 * a..3 * a + 3];
+            let m = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
+            if self.areas[a] > 0.0 {
+                pressure[a] = m / self.areas[a];
+            }
+        }
+        vec![
+            ("contact_force".into(), 3, self.committed_force.clone()),
+            ("contact_pressure".into(), 1, pressure),
+            ("contact_gap".into(), 1, gap),
+            ("contact_status".into(), 1, status),
+            ("contact_facet".into(), 1, facet),
+        ]
+    }
+
+    /// History columns at the committed state.
+    #[must_use]
+    pub fn columns(&self) -> Vec<(String, f64)> {
+        let mut out = Vec::new();
+        for (p, pair) in self.pairs.iter().enumerate() {
+            let (mut force, mut active, mut pen, mut area) = (0.0, 0usize, 0.0f64, 0.0);
+            for (q, pass) in pair.passes.iter().enumerate() {
+                for (j, st) in self.committed[p][q].iter().enumerate() {
+                    force -= st.lambda;
+                    if st.active {
+                        active += 1;
+                        pen = pen.max(-st.gap);
+                        area += pass.areas[j];
+                    }
+                }
+            }
+            out.push((format!("{}_normal_force", pair.name), force));
+            out.push((format!("{}_active", pair.name), active as f64));
+            out.push((format!("{}_max_penetration", pair.name), pen));
+            out.push((format!("{}_area", pair.name), area));
+        }
+        out
+    }
+}

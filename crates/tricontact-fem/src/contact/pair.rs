@@ -1,0 +1,434 @@
+//! A `[[contact]]` table resolved against the mesh: slave nodes, master facets, method and
+//! parameters, validated.
+//!
+//! # Facets and orientation
+//! Master faces become triangular facets: a tri3 as is, a quad4 `(a, b, c, d)` as `(a, b, c)` and
+//! `(a, c, d)`, a tri6 as its four corner/mid-node sub-triangles. The facet normal
+//! `W = (x_j − x_i) × (x_k − x_i) / |…|` must point **out of the master body** (the gap
+//! `P = (x_l − x_i)·W` is positive outside). A face bounding a body element is flipped if its node
+//! order gives an inward normal. A face of a rigid tool (no volume element) keeps the node order of
+//! the mesh, so its right-hand normal must point towards the slave. Either way the surface must be
+//! consistently oriented: no directed edge may appear in two facets (two neighbours with opposite
+//! normals); otherwise the model is rejected naming the faces.
+//!
+//! # Default penalty
+//! `α = 10 E h`, with `E` Young's modulus of the body the first master face bounds (of the slave
+//! body for a rigid master) and `h` the mean edge length of the master facets: the penalty spring
+//! of a node is about ten times the stiffness of an element of size `h`, so the penetration under
+//! a contact pressure `p` is about `0.1 h p / E` per node.
+//!
+//! # Adjust
+//! With `adjust = d`, every slave node whose initial gap is `−d ≤ P < 0` is moved along `W` onto the
+//! master surface in the reference configuration (no strain). Deeper penetrations are kept and
+//! reported (count, largest, node).
+
+use std::collections::HashMap;
+
+use tricontact::Vec3;
+use tricontact::contact::choose_facet;
+use tricontact::search::{Bvh, Surface};
+
+use crate::loads::{node_to_elements, outward_faces};
+use crate::mesh::{Element, ElementKind, Mesh};
+use crate::model::{ContactDef, ContactMethod};
+
+/// One search pass: slave nodes against the facets of a surface.
+#[derive(Clone, Debug)]
+pub struct Pass {
+    /// Slave nodes (mesh node indices).
+    pub slaves: Vec<usize>,
+    /// Tributary area of each slave node (`∫N_a dA` over its surface faces; 0 for a node group).
+    pub areas: Vec<f64>,
+    /// Facets over mesh node indices, oriented outwards.
+    pub surface: Surface,
+    /// Gmsh tag of the face each facet comes from.
+    pub face_tags: Vec<u64>,
+    /// Search radius: the longest facet edge.
+    pub radius: f64,
+}
+
+/// A resolved contact pair.
+#[derive(Clone, Debug)]
+pub struct ContactPair {
+    /// `slave-master`, used in history columns.
+    pub name: String,
+    /// Enforcement method.
+    pub method: ContactMethod,
+    /// Penalty factor `α` (force per length).
+    pub penalty: f64,
+    /// Largest penetration allowed by the augmented Lagrangian (length).
+    pub tolerance: f64,
+    /// Mean master facet edge length.
+    pub facet_size: f64,
+    /// Keep facet and triad from the start of the increment.
+    pub small_sliding: bool,
+    /// Slave against master, then (two pass) master against slave.
+    pub passes: Vec<Pass>,
+    /// Messages on initial penetrations and adjusted nodes.
+    pub report: Vec<String>,
+}
+
+/// Linear sub-triangles of a face (mesh node indices, mesh order).
+fn triangles(el: &Element) -> Vec<[usize; 3]> {
+    let n = &el.nodes;
+    match el.kind {
+        ElementKind::Tri3 => vec![[n[0], n[1], n[2]]],
+        ElementKind::Quad4 => vec![[n[0], n[1], n[2]], [n[0], n[2], n[3]]],
+        ElementKind::Tri6 => vec![
+            [n[0], n[3], n[5]],
+            [n[3], n[1], n[4]],
+            [n[5], n[4], n[2]],
+            [n[3], n[4], n[5]],
+        ],
+        _ => Vec::new(),
+    }
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> Vec3 {
+    Vec3::new(a[0] - b[0], a[1] - b[1], a[2] - b[2])
+}
+
+/// Oriented facets of the faces of a 2D group: `(facets, face tags)`, or a message.
+fn oriented_facets(
+    mesh: &Mesh,
+    group: &str,
+    faces: &[usize],
+    body: &[&Element],
+    node_elems: &[Vec<usize>],
+) -> Result<(Vec<[u32; 3]>, Vec<u64>), String> {
+    let mut facets = Vec::new();
+    let mut tags = Vec::new();
+    for &f in faces {
+        let el = &mesh.elements[f];
+        let tris = triangles(el);
+        if tris.is_empty() {
+            return Err(format!(
+                "contact surface '{group}': face {} is a {}, contact needs tri3, tri6 or quad4 faces",
+                el.tag,
+                el.kind.name()
+            ));
+        }
+        let sign = match outward_faces(mesh, &[f], body, node_elems) {
+            Ok(v) => v[0].1,
+            Err(_) => 1.0, // rigid tool: mesh order
+        };
+        for t in tris {
+            let t = if sign < 0.0 { [t[0], t[2], t[1]] } else { t };
+            let mut idx = [0u32; 3];
+            for (k, &a) in t.iter().enumerate() {
+                idx[k] = u32::try_from(a).map_err(|_| "too many nodes for contact".to_string())?;
+            }
+            facets.push(idx);
+            tags.push(el.tag);
+        }
+    }
+    // Consistent orientation: every directed edge at most once.
+    let mut edges: HashMap<(u32, u32), usize> = HashMap::new();
+    for (i, t) in facets.iter().enumerate() {
+        for k in 0..3 {
+            let e = (t[k], t[(k + 1) % 3]);
+            if let Some(&j) = edges.get(&e)
+                && tags[j] != tags[i]
+            {
+                return Err(format!(
+                    "contact surface '{group}' is inconsistently oriented: faces {} and {} have opposite normals across a shared edge (reorient the surface in the mesh)",
+                    tags[j], tags[i]
+                ));
+            }
+            edges.insert(e, i);
+        }
+    }
+    Ok((facets, tags))
+}
+
+/// Lumped areas of the nodes of `faces`: `∫N_a dA` for tri3 (`A/3`) and quad4 (`A/4`, exact for
+/// parallelograms); a tri6 by its four sub-triangles.
+fn nodal_areas(mesh: &Mesh, faces: &[usize]) -> HashMap<usize, f64> {
+    let mut out = HashMap::new();
+    for &f in faces {
+        let el = &mesh.elements[f];
+        let tris = triangles(el);
+        let tri_area = |t: &[usize; 3]| {
+            let x = |k: usize| mesh.nodes[t[k]];
+            0.5 * sub(x(1), x(0)).cross(&sub(x(2), x(0))).norm()
+        };
+        if el.kind == ElementKind::Quad4 {
+            let area: f64 = tris.iter().map(tri_area).sum();
+            for &a in &el.nodes {
+                *out.entry(a).or_insert(0.0) += area / 4.0;
+            }
+        } else {
+            for t in &tris {
+                let area = tri_area(t);
+                for &a in t {
+                    *out.entry(a).or_insert(0.0) += area / 3.0;
+                }
+            }
+        }
+    }
+    out
+}
+
+fn edge_lengths(mesh: &Mesh, facets: &[[u32; 3]]) -> (f64, f64) {
+    let (mut sum, mut max, mut n) = (0.0, 0.0f64, 0usize);
+    for t in facets {
+        for k in 0..3 {
+            let l = sub(
+                mesh.nodes[t[(k + 1) % 3] as usize],
+                mesh.nodes[t[k] as usize],
+            )
+            .norm();
+            sum += l;
+            max = max.max(l);
+            n += 1;
+        }
+    }
+    (sum / n.max(1) as f64, max)
+}
+
+fn positions(mesh: &Mesh) -> Vec<Vec3> {
+    mesh.nodes
+        .iter()
+        .map(|p| Vec3::new(p[0], p[1], p[2]))
+        .collect()
+}
+
+/// Inputs of the resolution besides the mesh.
+pub struct Bodies<'a> {
+    /// Volume elements of the bodies.
+    pub elements: Vec<&'a Element>,
+    /// Young's modulus of each body element.
+    pub youngs: Vec<f64>,
+}
+
+/// Resolves one `[[contact]]` table; moves adjusted slave nodes in `mesh`; marks rigid master nodes
+/// in `rigid` (nodes of no body that must be fully prescribed).
+///
+/// # Errors
+/// Every problem found, as messages.
+pub fn resolve(
+    def: &ContactDef,
+    mesh: &mut Mesh,
+    bodies: &Bodies<'_>,
+    in_body: &[bool],
+    rigid: &mut [bool],
+) -> Result<ContactPair, Vec<String>> {
+    let name = format!("{}-{}", def.slave, def.master);
+    let mut problems = Vec::new();
+    if def.two_pass && def.method == ContactMethod::Multiplier {
+        problems.push(format!(
+            "contact '{name}': two_pass with method = \"multiplier\" gives redundant constraints (each node pair constrained twice, a singular saddle-point system); use single pass or the penalty or augmented method"
+        ));
+    }
+    if let Some(a) = def.penalty
+        && !(a > 0.0 && a.is_finite())
+    {
+        problems.push(format!("contact '{name}': penalty must be > 0 (got {a})"));
+    }
+    if !(def.tolerance > 0.0 && def.tolerance.is_finite()) {
+        problems.push(format!(
+            "contact '{name}': tolerance must be > 0 (got {})",
+            def.tolerance
+        ));
+    }
+    if let Some(d) = def.adjust
+        && !(d >= 0.0 && d.is_finite())
+    {
+        problems.push(format!("contact '{name}': adjust must be ≥ 0 (got {d})"));
+    }
+    let node_elems = node_to_elements(mesh.nodes.len(), &bodies.elements);
+    let master = match mesh.group(&def.master) {
+        Some(g) if g.dim == 2 => Some(g.clone()),
+        Some(g) => {
+            problems.push(format!(
+                "contact '{name}': master '{}' has dimension {}, a surface (2D) group is needed",
+                g.name, g.dim
+            ));
+            None
+        }
+        None => {
+            problems.push(format!(
+                "contact '{name}': unknown master surface group '{}' (groups: {})",
+                def.master,
+                mesh.group_list()
+            ));
+            None
+        }
+    };
+    let slave = mesh.group(&def.slave).cloned();
+    if slave.is_none() {
+        problems.push(format!(
+            "contact '{name}': unknown slave group '{}' (groups: {})",
+            def.slave,
+            mesh.group_list()
+        ));
+    }
+    let (Some(master), Some(slave)) = (master, slave) else {
+        return Err(problems);
+    };
+    let (m_facets, m_tags) = match oriented_facets(
+        mesh,
+        &master.name,
+        &master.elements,
+        &bodies.elements,
+        &node_elems,
+    ) {
+        Ok(v) => v,
+        Err(m) => {
+            problems.push(m);
+            return Err(problems);
+        }
+    };
+    if m_facets.is_empty() {
+        problems.push(format!("contact '{name}': master surface has no faces"));
+        return Err(problems);
+    }
+    let slave_faces: Vec<usize> = if slave.dim == 2 {
+        slave.elements.clone()
+    } else {
+        Vec::new()
+    };
+    let (s_facets, s_tags) = match oriented_facets(
+        mesh,
+        &slave.name,
+        &slave_faces,
+        &bodies.elements,
+        &node_elems,
+    ) {
+        Ok(v) => v,
+        Err(m) => {
+            problems.push(m);
+            return Err(problems);
+        }
+    };
+    if def.two_pass && s_facets.is_empty() {
+        problems.push(format!(
+            "contact '{name}': two_pass needs a surface (2D) slave group"
+        ));
+    }
+    let slaves: Vec<usize> = slave
+        .nodes
+        .iter()
+        .copied()
+        .filter(|&a| in_body[a])
+        .collect();
+    if slaves.is_empty() {
+        problems.push(format!(
+            "contact '{name}': the slave group has no node of any body"
+        ));
+    }
+    // Rigid master nodes.
+    for t in &m_facets {
+        for &a in t {
+            if !in_body[a as usize] {
+                rigid[a as usize] = true;
+            }
+        }
+    }
+    // Young's modulus for the default penalty.
+    let owner_e = |faces: &[usize]| {
+        faces.iter().find_map(|&f| {
+            let c = &mesh.elements[f].nodes;
+            node_elems[c[0]]
+                .iter()
+                .find(|&&e| c.iter().all(|a| bodies.elements[e].nodes.contains(a)))
+                .map(|&e| bodies.youngs[e])
+        })
+    };
+    let slave_e = slaves
+        .first()
+        .and_then(|&a| node_elems[a].first().map(|&e| bodies.youngs[e]));
+    let e = owner_e(&master.elements).or(slave_e).unwrap_or(1.0);
+    let (h_mean, h_max) = edge_lengths(mesh, &m_facets);
+    let penalty = def.penalty.unwrap_or(10.0 * e * h_mean);
+    if !problems.is_empty() {
+        return Err(problems);
+    }
+    let surface = match Surface::new(m_facets, mesh.nodes.len()) {
+        Ok(s) => s,
+        Err(e) => return Err(vec![format!("contact '{name}': {e}")]),
+    };
+    let mut report = Vec::new();
+    // Initial penetrations and adjust.
+    {
+        let x = positions(mesh);
+        let bvh = Bvh::build(&surface, &x, h_max).map_err(|e| vec![e.to_string()])?;
+        let adjust = def.adjust.unwrap_or(0.0);
+        let (mut moved, mut deep, mut largest, mut worst) = (0usize, 0usize, 0.0f64, 0usize);
+        let mut moves = Vec::new();
+        for &a in &slaves {
+            let Ok(idx) = u32::try_from(a) else { continue };
+            let Some((_, pair)) = choose_facet(&surface, &bvh, &x, idx, h_max) else {
+                continue;
+            };
+            let p = pair.gap();
+            if p >= 0.0 {
+                continue;
+            }
+            if -p <= adjust {
+                moves.push((a, -p * pair.facet.normal()));
+                moved += 1;
+            } else if -p > 1e-12 * h_mean {
+                deep += 1;
+                if -p > largest {
+                    largest = -p;
+                    worst = a;
+                }
+            }
+        }
+        for (a, d) in moves {
+            for i in 0..3 {
+                mesh.nodes[a][i] += d[i];
+            }
+        }
+        if moved > 0 {
+            report.push(format!(
+                "contact '{name}': {moved} slave nodes moved onto the master surface (adjust = {adjust:e})"
+            ));
+        }
+        if deep > 0 {
+            report.push(format!(
+                "contact '{name}': {deep} slave nodes initially penetrate beyond adjust, largest {largest:.3e} at node {} ({:.4e}, {:.4e}, {:.4e})",
+                mesh.node_tags[worst], mesh.nodes[worst][0], mesh.nodes[worst][1], mesh.nodes[worst][2]
+            ));
+        }
+    }
+    let s_areas = nodal_areas(mesh, &slave_faces);
+    let areas = slaves
+        .iter()
+        .map(|a| s_areas.get(a).copied().unwrap_or(0.0))
+        .collect();
+    let mut passes = vec![Pass {
+        slaves,
+        areas,
+        surface,
+        face_tags: m_tags,
+        radius: h_max,
+    }];
+    if def.two_pass {
+        let m_areas = nodal_areas(mesh, &master.elements);
+        let mut m_nodes: Vec<usize> = m_areas.keys().copied().collect();
+        m_nodes.sort_unstable();
+        let areas = m_nodes.iter().map(|a| m_areas[a]).collect();
+        let (_, s_max) = edge_lengths(mesh, &s_facets);
+        let surface = Surface::new(s_facets, mesh.nodes.len())
+            .map_err(|e| vec![format!("contact '{name}': {e}")])?;
+        passes.push(Pass {
+            slaves: m_nodes,
+            areas,
+            surface,
+            face_tags: s_tags,
+            radius: s_max,
+        });
+    }
+    Ok(ContactPair {
+        name,
+        method: def.method,
+        penalty,
+        tolerance: def.tolerance * h_mean,
+        facet_size: h_mean,
+        small_sliding: def.small_sliding,
+        passes,
+        report,
+    })
+}

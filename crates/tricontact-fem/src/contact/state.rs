@@ -1,0 +1,33 @@
+//! Per-node contact state, part of the committed state of an increment (restored on cutback).
+//!
+//! Kept ready for tangential (friction) terms: the facet and the barycentric coordinates of the
+//! foot point are stored with the normal.
+
+/// State of one slave node in one pass.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct NodeState {
+    /// Facet (index into the pass's surface) at the last evaluation, `None` when none found.
+    pub facet: Option<u32>,
+    /// Barycentric coordinates `N_i, N_j, N_k` of the foot point.
+    pub shape: [f64; 3],
+    /// Facet normal `W`.
+    pub normal: [f64; 3],
+    /// Gap `P` (0 without facet).
+    pub gap: f64,
+    /// Normal multiplier at the last evaluation (`λ`, `αP` or `λ̂`; ≤ 0 in compression, 0 open).
+    pub lambda: f64,
+    /// Augmented Lagrangian: Uzawa estimate `λ_k`.
+    pub lambda_k: f64,
+    /// Closed (carrying force) at the last evaluation.
+    pub active: bool,
+    /// Status changes in this increment (multiplier method: cycle detection).
+    pub switches: u32,
+    /// Status frozen for the rest of the increment after cycling.
+    pub frozen: Option<bool>,
+    /// Facet changes in this increment (cycle detection).
+    pub facet_switches: u32,
+    /// Facet frozen for the rest of the increment after cycling.
+    pub facet_frozen: bool,
+    /// Small sliding: facet, shape functions and normal at the start of the increment.
+    pub start: Option<(u32, [f64; 3], [f64; 3])>,
+}

@@ -1,0 +1,524 @@
+//! Contact in the solver: edge/vertex positions, release, sliding, convex corner, convergence
+//! rate, non-matching meshes (single and two pass), adjust, small sliding, input errors.
+#![allow(clippy::needless_range_loop)]
+
+mod common;
+
+use tricontact_fem::analysis::Analysis;
+use tricontact_fem::contact::ContactTerms;
+use tricontact_fem::mesh::{ElementKind, Mesh};
+use tricontact_fem::model::Model;
+use tricontact_fem::structured::box_mesh;
+
+const MAT: &str = r#"
+[[material]]
+name = "m"
+type = "linear_elastic"
+E = 1000.0
+nu = 0.3
+[[body]]
+group = "lower_solid"
+material = "m"
+[[body]]
+group = "upper_solid"
+material = "m"
+"#;
+
+fn contact(method: &str, extra: &str) -> String {
+    format!(
+        "[[contact]]\nslave = \"upper_zmin\"\nmaster = \"lower_zmax\"\nmethod = \"{method}\"\n{extra}\n"
+    )
+}
+
+fn node_force(terms: &ContactTerms, a: usize) -> [f64; 3] {
+    let f = terms.forces();
+    [f[3 * a], f[3 * a + 1], f[3 * a + 2]]
+}
+
+fn history(terms: &ContactTerms, key: &str) -> f64 {
+    use tricontact_fem::assembly::ExtraTerms;
+    terms
+        .history()
+        .into_iter()
+        .find(|(k, _)| k.ends_with(key))
+        .map(|(_, v)| v)
+        .expect("column")
+}
+
+/// A 0.25 × 0.25 single-hex block on a rigid flat tet4 master, its corner `(x0, y0)`.
+fn small_block(x0: f64, y0: f64) -> Mesh {
+    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Tet4);
+    let u = box_mesh([0.25, 0.25, 0.25], [1, 1, 1], ElementKind::Hex8);
+    common::stack(&l, &u, [x0, y0, 0.5])
+}
+
+#[test]
+fn interior_edge_and_vertex_nodes_get_the_same_force() {
+    // Corner node (x0, y0) at a facet interior, on a shared edge (x = 0.5), on a shared vertex.
+    let text = format!(
+        "{MAT}[[boundary]]\ngroup = \"lower_solid\"\nfix = [\"x\", \"y\", \"z\"]\n[[boundary]]\ngroup = \"upper_xmin\"\nfix = [\"x\"]\n[[boundary]]\ngroup = \"upper_ymin\"\nfix = [\"y\"]\n[[load]]\ngroup = \"upper_zmax\"\npressure = 2.0\n{}[[step]]\nresidual_tolerance = 1e-12\n",
+        contact("multiplier", "")
+    );
+    let expected = 2.0 * 0.25 * 0.25 / 4.0;
+    for (x0, y0) in [(0.1, 0.1), (0.5, 0.1), (0.5, 0.5)] {
+        let mesh = small_block(x0, y0);
+        let corner = mesh
+            .nodes
+            .iter()
+            .position(|p| (p[0] - x0).abs() < 1e-12 && (p[1] - y0).abs() < 1e-12 && p[2] == 0.5)
+            .expect("corner");
+        let an = common::analysis(mesh, &text);
+        let (terms, _, _) = common::solve_contact(&an);
+        for &s in &an.contacts[0].passes[0].slaves {
+            let f = node_force(&terms, s);
+            assert!(f[0].abs() + f[1].abs() <= 1e-12, "frictionless: {f:?}");
+            assert!(
+                (f[2] - expected).abs() <= 1e-9 * expected,
+                "({x0}, {y0}) node {s} (corner {corner}): {} vs {expected}",
+                f[2]
+            );
+        }
+    }
+}
+
+fn press_release(method: &str) -> (Analysis, Vec<(f64, f64, Vec<f64>)>) {
+    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
+    let u = box_mesh([0.5, 0.5, 0.25], [2, 2, 1], ElementKind::Hex8);
+    let mesh = common::stack(&l, &u, [0.25, 0.25, 0.5]);
+    let text = format!(
+        r#"{MAT}
+[[boundary]]
+group = "lower_zmin"
+fix = ["x", "y", "z"]
+[[boundary]]
+group = "upper_zmax"
+displacement = {{ x = 0.0, y = 0.0, z = -0.01 }}
+steps = ["press"]
+[[boundary]]
+group = "upper_zmax"
+displacement = {{ x = 0.0, y = 0.0, z = 0.01 }}
+steps = ["release"]
+{}
+[[step]]
+name = "press"
+increments = 2
+nlgeom = true
+[[step]]
+name = "release"
+increments = 2
+nlgeom = true
+"#,
+        contact(method, "")
+    );
+    let an = common::analysis(mesh, &text);
+    let mut terms = ContactTerms::new(&an);
+    let mut out = Vec::new();
+    tricontact_fem::driver::run(&an, &mut terms, &mut |info| {
+        let get = |k: &str| {
+            info.history
+                .iter()
+                .find(|(n, _)| n.ends_with(k))
+                .map_or(f64::NAN, |(_, v)| *v)
+        };
+        let gaps = info
+            .point_fields
+            .iter()
+            .find(|(n, _, _)| n == "contact_gap")
+            .map(|(_, _, v)| v.clone())
+            .unwrap_or_default();
+        out.push((get("_normal_force"), get("_active"), gaps));
+        Ok(())
+    })
+    .expect("run");
+    (an, out)
+}
+
+#[test]
+fn pressed_then_pulled_back_loses_contact() {
+    for method in ["penalty", "multiplier", "augmented"] {
+        let (an, rec) = press_release(method);
+        let pressed = &rec[1];
+        assert!(
+            pressed.0 > 1.0 && pressed.1 == 9.0,
+            "{method}: {:?}",
+            (pressed.0, pressed.1)
+        );
+        let released = rec.last().expect("increments");
+        assert_eq!(released.1, 0.0, "{method}: closed nodes after release");
+        assert_eq!(released.0, 0.0, "{method}: normal force after release");
+        for &s in &an.contacts[0].passes[0].slaves {
+            assert!(
+                released.2[s] > 1e-3,
+                "{method}: gap {} at node {s}",
+                released.2[s]
+            );
+        }
+    }
+}
+
+#[test]
+fn newton_converges_quadratically_once_the_active_set_is_fixed() {
+    for method in ["penalty", "multiplier", "augmented"] {
+        let l = box_mesh([1.0, 1.0, 0.5], [3, 3, 1], ElementKind::Hex8);
+        let u = box_mesh([0.5, 0.5, 0.25], [2, 2, 1], ElementKind::Hex8);
+        let mesh = common::stack(&l, &u, [0.3, 0.3, 0.5]);
+        let text = format!(
+            "{MAT}[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n[[boundary]]\ngroup = \"upper_zmax\"\ndisplacement = {{ x = 0.02, y = 0.0, z = -0.01 }}\n{}[[step]]\nincrements = 2\nnlgeom = true\nresidual_tolerance = 1e-11\n",
+            contact(method, "")
+        );
+        let an = common::analysis(mesh, &text);
+        let (_, rec, notes) = common::solve_contact(&an);
+        let mut checked = 0;
+        for (r, n) in rec.iter().zip(&notes) {
+            let rel: Vec<f64> = r.residuals.iter().map(|v| v / r.reference).collect();
+            eprintln!("{method}: iterations {} residuals {rel:?}", r.iterations);
+            // Iterations k → k+1 with an unchanged active set (note k+1 says "0 changed") and a
+            // residual above round-off: r_{k+1} ≤ C r_k².
+            for k in 1..rel.len() - 1 {
+                let fixed = n.get(k + 1).is_some_and(|s| s.contains(" 0 changed"));
+                if fixed && rel[k] < 1e-2 && rel[k] > 1e-11 && rel[k + 1] > 1e-12 {
+                    assert!(rel[k + 1] <= 100.0 * rel[k] * rel[k], "{method}: {rel:?}");
+                    checked += 1;
+                }
+            }
+            assert!(r.iterations <= 12, "{method}: {} iterations", r.iterations);
+        }
+        assert!(checked > 0, "{method}: no iteration checked");
+    }
+}
+
+#[test]
+fn block_dragged_across_a_fine_master_keeps_its_normal_force() {
+    for method in ["penalty", "multiplier", "augmented"] {
+        let l = box_mesh([2.0, 1.0, 0.25], [16, 8, 1], ElementKind::Tet4);
+        let u = box_mesh([0.5, 0.5, 0.25], [3, 3, 1], ElementKind::Hex8);
+        let mesh = common::stack(&l, &u, [0.2, 0.25, 0.25]);
+        let text = format!(
+            "{MAT}[[boundary]]\ngroup = \"lower_solid\"\nfix = [\"x\", \"y\", \"z\"]\n[[boundary]]\ngroup = \"upper_zmax\"\ndisplacement = {{ x = 0.9, y = 0.0 }}\n[[load]]\ngroup = \"upper_zmax\"\npressure = 4.0\nsteps = [\"drag\"]\n{}[[step]]\nname = \"drag\"\nincrements = 6\nresidual_tolerance = 1e-11\n",
+            contact(method, "")
+        );
+        let an = common::analysis(mesh, &text);
+        let mut terms = ContactTerms::new(&an);
+        let mut forces = Vec::new();
+        tricontact_fem::driver::run(&an, &mut terms, &mut |info| {
+            let f = info
+                .history
+                .iter()
+                .find(|(n, _)| n.ends_with("_normal_force"))
+                .map_or(f64::NAN, |(_, v)| *v);
+            forces.push((info.load_factor, f));
+            Ok(())
+        })
+        .expect("run");
+        // The pressure ramps with the load factor: normal force = t p A.
+        for (t, f) in &forces {
+            let expected = t * 4.0 * 0.25;
+            assert!(
+                (f - expected).abs() <= 1e-6 * expected,
+                "{method}: t {t}: {f} vs {expected}"
+            );
+        }
+        assert!(forces.len() >= 6);
+    }
+}
+
+#[test]
+fn block_pressed_on_a_convex_edge_stays_within_the_tolerance() {
+    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
+    let u = box_mesh([0.6, 0.5, 0.25], [3, 2, 1], ElementKind::Hex8);
+    let mesh = common::stack(&l, &u, [0.7, 0.25, 0.5]);
+    let text = format!(
+        "{MAT}[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n[[boundary]]\ngroup = \"upper_zmax\"\ndisplacement = {{ x = 0.0, y = 0.0, z = -0.02 }}\n{}[[step]]\nincrements = 2\nnlgeom = true\n",
+        contact("augmented", "tolerance = 1e-4\ntwo_pass = true")
+    );
+    let an = common::analysis(mesh, &text);
+    let (terms, _, _) = common::solve_contact(&an);
+    let pen = history(&terms, "_max_penetration");
+    let tol = an.contacts[0].tolerance;
+    assert!(history(&terms, "_active") > 0.0);
+    assert!(pen <= tol, "penetration {pen:e} > tolerance {tol:e}");
+}
+
+/// Largest relative deviation of the slave pressure from `p` on unrelated meshes.
+fn non_matching(method: &str, two_pass: bool) -> f64 {
+    let l = box_mesh([1.0, 1.0, 0.5], [3, 3, 1], ElementKind::Tet4);
+    let u = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
+    let mesh = common::stack(&l, &u, [0.0, 0.0, 0.5]);
+    let mut text = format!("{MAT}[[load]]\ngroup = \"upper_zmax\"\npressure = 1.0\n");
+    for side in ["lower", "upper"] {
+        for (g, c) in [("xmin", "x"), ("xmax", "x"), ("ymin", "y"), ("ymax", "y")] {
+            text += &format!("[[boundary]]\ngroup = \"{side}_{g}\"\nfix = [\"{c}\"]\n");
+        }
+    }
+    text += "[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"z\"]\n";
+    let extra = if two_pass {
+        "two_pass = true\ntolerance = 1e-10"
+    } else {
+        "tolerance = 1e-10"
+    };
+    text += &contact(method, extra);
+    text += "[[step]]\nresidual_tolerance = 1e-10\n";
+    let an = common::analysis(mesh, &text);
+    let (terms, _, _) = common::solve_contact(&an);
+    let pass = &an.contacts[0].passes[0];
+    let mut worst = 0.0f64;
+    for (j, &s) in pass.slaves.iter().enumerate() {
+        let f = node_force(&terms, s);
+        let m = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
+        worst = worst.max((m / pass.areas[j] - 1.0).abs());
+    }
+    worst
+}
+
+#[test]
+fn non_matching_meshes_pressure_deviation_bounds() {
+    // Measured (tet4 3×3 master, hex8 2×2 slave): penalty 0.220 / two pass 0.0835, augmented
+    // 0.248 / two pass 0.0758, multiplier 0.248. Bounds 10 % above; two pass must beat single pass.
+    let cases = [
+        ("penalty", false, 0.243),
+        ("penalty", true, 0.092),
+        ("augmented", false, 0.273),
+        ("augmented", true, 0.084),
+        ("multiplier", false, 0.273),
+    ];
+    let mut single = 0.0;
+    for (m, two, bound) in cases {
+        let e = non_matching(m, two);
+        eprintln!("non-matching {m} two_pass={two}: largest pressure deviation {e:.3e}");
+        assert!(e <= bound, "{m} two_pass={two}: {e:e} > {bound}");
+        if two {
+            assert!(
+                e < 0.5 * single,
+                "{m}: two pass {e:e} vs single pass {single:e}"
+            );
+        }
+        single = e;
+    }
+}
+
+#[test]
+fn small_sliding_passes_the_patch_test() {
+    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
+    let u = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
+    let mesh = common::stack(&l, &u, [0.0, 0.0, 0.5]);
+    let mut text = format!("{MAT}[[load]]\ngroup = \"upper_zmax\"\npressure = 1.0\n");
+    for side in ["lower", "upper"] {
+        for (g, c) in [("xmin", "x"), ("xmax", "x"), ("ymin", "y"), ("ymax", "y")] {
+            text += &format!("[[boundary]]\ngroup = \"{side}_{g}\"\nfix = [\"{c}\"]\n");
+        }
+    }
+    text += "[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"z\"]\n";
+    text += &contact("multiplier", "small_sliding = true");
+    text += "[[step]]\nresidual_tolerance = 1e-12\n";
+    let an = common::analysis(mesh, &text);
+    let (terms, _, _) = common::solve_contact(&an);
+    let pass = &an.contacts[0].passes[0];
+    for (j, &s) in pass.slaves.iter().enumerate() {
+        let f = node_force(&terms, s);
+        assert!((f[2] / pass.areas[j] - 1.0).abs() < 1e-8);
+    }
+}
+
+#[test]
+fn adjust_removes_small_initial_penetrations_and_reports_deeper_ones() {
+    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
+    let u = box_mesh([0.5, 0.5, 0.25], [1, 1, 1], ElementKind::Hex8);
+    let mesh = common::stack(&l, &u, [0.25, 0.25, 0.499]);
+    let base = format!(
+        "[mesh]\nfile = \"x.msh\"\n{MAT}[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n[[step]]\n"
+    );
+    let with = format!("{base}{}", contact("penalty", "adjust = 0.002"));
+    let model = Model::parse(&with, std::path::Path::new("m.toml")).expect("model");
+    let an = Analysis::new(&model, mesh.clone()).expect("analysis");
+    assert!(
+        an.contacts[0].report[0].contains("moved"),
+        "{:?}",
+        an.contacts[0].report
+    );
+    for &s in &an.contacts[0].passes[0].slaves {
+        assert!(
+            (an.mesh.nodes[s][2] - 0.5).abs() < 1e-12,
+            "node {s} not moved onto the master"
+        );
+    }
+    let without = format!("{base}{}", contact("penalty", ""));
+    let model = Model::parse(&without, std::path::Path::new("m.toml")).expect("model");
+    let an = Analysis::new(&model, mesh).expect("analysis");
+    let r = an.contacts[0].report.join(" ");
+    assert!(
+        r.contains("4 slave nodes initially penetrate") && r.contains("1.000e-3"),
+        "{r}"
+    );
+}
+
+#[test]
+fn bad_contact_input_is_rejected_with_a_clear_message() {
+    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
+    let u = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
+    let mesh = common::stack(&l, &u, [0.0, 0.0, 0.5]);
+    let base = format!("[mesh]\nfile = \"x.msh\"\n{MAT}[[step]]\n");
+    let err = |c: &str| {
+        let text = format!("{base}{c}");
+        match Model::parse(&text, std::path::Path::new("m.toml")) {
+            Err(e) => e.to_string(),
+            Ok(model) => Analysis::new(&model, mesh.clone())
+                .expect_err("invalid")
+                .to_string(),
+        }
+    };
+    let e = err(&contact("multiplier", "two_pass = true"));
+    assert!(e.contains("two_pass") && e.contains("redundant"), "{e}");
+    let e = err(&contact("penalty", "penalti = 3.0"));
+    assert!(e.contains("penalti"), "{e}");
+    let e =
+        err("[[contact]]\nslave = \"upper_zmin\"\nmaster = \"nowhere\"\nmethod = \"penalty\"\n");
+    assert!(e.contains("nowhere"), "{e}");
+    let e = err(&contact("penalty", "penalty = -1.0"));
+    assert!(e.contains("penalty must be > 0"), "{e}");
+    // A rigid master (no volume element) with one face flipped.
+    let mut m2 = mesh.clone();
+    let g = m2
+        .groups
+        .iter()
+        .position(|g| g.name == "lower_zmax")
+        .expect("group");
+    let f = m2.groups[g].elements[0];
+    m2.elements[f].nodes.reverse();
+    m2.groups.retain(|g| g.name != "lower_solid");
+    let text = format!(
+        "[mesh]\nfile = \"x.msh\"\n[[material]]\nname = \"m\"\ntype = \"linear_elastic\"\nE = 1.0\nnu = 0.3\n[[body]]\ngroup = \"upper_solid\"\nmaterial = \"m\"\n[[boundary]]\ngroup = \"lower_zmax\"\nfix = [\"x\", \"y\", \"z\"]\n[[step]]\n{}",
+        contact("penalty", "")
+    );
+    let model = Model::parse(&text, std::path::Path::new("m.toml")).expect("model");
+    let e = Analysis::new(&model, m2)
+        .expect_err("inconsistent")
+        .to_string();
+    assert!(e.contains("inconsistently oriented"), "{e}");
+}
+
+#[test]
+fn block_pressed_by_a_rigid_tool_without_volume_elements() {
+    // The lower box has no body: its top face is a rigid master, moved up by 0.01 against a
+    // block held at its top. The tool's nodes are fully prescribed; the contact force balances the
+    // block's reaction.
+    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Tet4);
+    let u = box_mesh([0.5, 0.5, 0.25], [2, 2, 1], ElementKind::Hex8);
+    let mesh = common::stack(&l, &u, [0.25, 0.25, 0.5]);
+    let text = format!(
+        "[[material]]\nname = \"m\"\ntype = \"linear_elastic\"\nE = 1000.0\nnu = 0.3\n[[body]]\ngroup = \"upper_solid\"\nmaterial = \"m\"\n[[boundary]]\ngroup = \"lower_zmax\"\ndisplacement = {{ x = 0.0, y = 0.0, z = 0.01 }}\n[[boundary]]\ngroup = \"upper_zmax\"\nfix = [\"x\", \"y\", \"z\"]\n{}[[step]]\nincrements = 2\n",
+        contact("multiplier", "")
+    );
+    let an = common::analysis(mesh, &text);
+    let (terms, rec, _) = common::solve_contact(&an);
+    let last = rec.last().expect("increments");
+    let reaction = last.reactions[1][2];
+    let force = history(&terms, "_normal_force");
+    assert!(force > 0.0 && history(&terms, "_active") == 9.0);
+    assert!(
+        (force + reaction).abs() <= 1e-8 * force,
+        "{force} vs reaction {reaction}"
+    );
+    // A rigid master node without all three components prescribed is an error.
+    let bad = text.replace(
+        "displacement = { x = 0.0, y = 0.0, z = 0.01 }",
+        "fix = [\"z\"]",
+    );
+    let model = Model::parse(
+        &format!("[mesh]\nfile = \"x.msh\"\n{bad}"),
+        std::path::Path::new("m.toml"),
+    )
+    .expect("model");
+    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Tet4);
+    let u = box_mesh([0.5, 0.5, 0.25], [2, 2, 1], ElementKind::Hex8);
+    let e = Analysis::new(&model, common::stack(&l, &u, [0.25, 0.25, 0.5]))
+        .expect_err("under-prescribed tool")
+        .to_string();
+    assert!(e.contains("rigid contact surface"), "{e}");
+}
+
+#[test]
+fn contact_fields_and_history_columns_are_written() {
+    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
+    let u = box_mesh([0.5, 0.5, 0.25], [2, 2, 1], ElementKind::Hex8);
+    let mesh = common::stack(&l, &u, [0.25, 0.25, 0.5]);
+    let text = format!(
+        "{MAT}[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n[[boundary]]\ngroup = \"upper_zmax\"\ndisplacement = {{ x = 0.0, y = 0.0, z = -0.01 }}\n{}[[step]]\n",
+        contact("penalty", "")
+    );
+    let an = common::analysis(mesh, &text);
+    let dir = std::env::temp_dir().join(format!("tricontact-contact-out-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut w = tricontact_fem::output::ResultWriter::new(&an, &dir, "m").expect("writer");
+    let mut terms = ContactTerms::new(&an);
+    tricontact_fem::driver::run(&an, &mut terms, &mut |info| w.write(&an, info)).expect("run");
+    let csv = std::fs::read_to_string(dir.join("history.csv")).expect("history");
+    let header = csv.lines().next().expect("header");
+    for col in ["_normal_force", "_active", "_max_penetration", "_area"] {
+        assert!(
+            header.contains(&format!("upper_zmin-lower_zmax{col}")),
+            "{header}"
+        );
+    }
+    let row: Vec<&str> = csv.lines().nth(1).expect("row").split(',').collect();
+    assert_eq!(row.len(), header.split(',').count());
+    let vtu = std::fs::read_to_string(dir.join("m_001_0001.vtu")).expect("vtu");
+    for field in [
+        "contact_force",
+        "contact_pressure",
+        "contact_gap",
+        "contact_status",
+        "contact_facet",
+    ] {
+        assert!(vtu.contains(&format!("Name=\"{field}\"")), "{field}");
+    }
+    assert!(!vtu.contains("NaN"));
+    // Area of the closed nodes = the block's bottom (all 9 nodes closed).
+    let area = history(&terms, "_area");
+    assert!((area - 0.25).abs() < 1e-12, "{area}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn multiplier_status_cycling_is_frozen_and_reported() {
+    use tricontact_fem::assembly::ExtraTerms;
+    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
+    let u = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
+    let mesh = common::stack(&l, &u, [0.0, 0.0, 0.5]);
+    let text = format!(
+        "{MAT}[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n{}[[step]]\n",
+        contact("multiplier", "")
+    );
+    let an = common::analysis(mesh, &text);
+    let mut terms = ContactTerms::new(&an);
+    let n = an.num_nodal_dofs();
+    let mut u = vec![0.0; n + terms.num_extra()];
+    terms.begin_increment(&u).expect("begin");
+    // Touching nodes (P = 0): λ = −1 closes them, λ = +1 (a pull) opens them. Alternate.
+    let mut notes = Vec::new();
+    for k in 0..8 {
+        let lambda = if k % 2 == 0 { -1.0 } else { 1.0 };
+        u[n..].iter_mut().for_each(|v| *v = lambda);
+        let mut r = vec![0.0; u.len()];
+        let mut t = Vec::new();
+        terms.add_terms(&u, &mut r, &mut t).expect("terms");
+        notes.push(terms.iteration_note().unwrap_or_default());
+    }
+    // Switches 1..=4 are allowed; the 5th change freezes every node in its status.
+    assert!(!notes[3].contains("frozen"), "{notes:?}");
+    assert!(notes[4].contains("9 frozen"), "{notes:?}");
+    assert!(
+        notes[5].contains(" 0 changed"),
+        "frozen status must not change: {notes:?}"
+    );
+    // A new increment starts unfrozen.
+    terms.restore();
+    terms.begin_increment(&vec![0.0; u.len()]).expect("begin");
+    let mut r = vec![0.0; u.len()];
+    terms.add_terms(&u, &mut r, &mut Vec::new()).expect("terms");
+    assert!(
+        !terms
+            .iteration_note()
+            .unwrap_or_default()
+            .contains("frozen")
+    );
+}
