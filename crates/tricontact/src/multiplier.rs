@@ -38,6 +38,7 @@ pub struct MultiplierTerms {
 /// # Errors
 /// [`GeometryError::Overflow`] if the geometric stiffness overflows (a non-finite `lambda`
 /// included).
+#[inline]
 pub fn multiplier(pair: &NodeFacet, lambda: f64) -> Result<MultiplierTerms, GeometryError> {
     let geometric_stiffness = pair.second_order(0.0, lambda);
     if !(pair.cannot_overflow(0.0, lambda) || all_finite(&geometric_stiffness)) {

@@ -238,6 +238,7 @@ impl NodeFacet {
         self.second_order_bound(alpha, beta) < 1e300
     }
 
+    #[inline]
     pub(crate) fn second_order(&self, alpha: f64, beta: f64) -> Mat12 {
         let w = self.facet.normal();
         let n = self.shape4();

@@ -50,6 +50,7 @@ impl PenaltyTerms {
 ///
 /// # Errors
 /// [`GeometryError::Overflow`] if the force or tangent overflows (a non-finite `alpha` included).
+#[inline]
 pub fn penalty(pair: &NodeFacet, alpha: f64) -> Result<PenaltyTerms, GeometryError> {
     penalty_with(pair, alpha, alpha * pair.gap())
 }
@@ -59,6 +60,7 @@ pub fn penalty(pair: &NodeFacet, alpha: f64) -> Result<PenaltyTerms, GeometryErr
 ///
 /// # Errors
 /// [`GeometryError::Overflow`] if the force or tangent overflows.
+#[inline]
 pub(crate) fn penalty_with(
     pair: &NodeFacet,
     alpha: f64,
