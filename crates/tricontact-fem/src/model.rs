@@ -3,7 +3,7 @@
 //! Every table rejects unknown keys (`deny_unknown_fields`). Relative paths
 //! (mesh file, output folder) are resolved against the model file's folder.
 //! Syntax and schema errors report the line and column of the offending key.
-//! See `README-model.md` for the documented keys and a complete example.
+//! The repository README ("Model-file reference") documents every key with a complete example.
 
 use std::path::{Path, PathBuf};
 
@@ -178,7 +178,7 @@ pub struct ContactDef {
     pub master: String,
     /// Enforcement method.
     pub method: ContactMethod,
-    /// Penalty factor (force per length); default `10 E h` (see README-model).
+    /// Penalty factor (force per length); default `10 E h` (see the README, `[[contact]]`).
     pub penalty: Option<f64>,
     /// Also constrain the master nodes against the slave surface.
     #[serde(default)]
