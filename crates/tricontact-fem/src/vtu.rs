@@ -88,6 +88,21 @@ fn data_array<W: std::io::Write>(
     Ok(())
 }
 
+/// Writes `<tag>` holding one `Float64` data array per field.
+fn fields<W: std::io::Write>(
+    w: &mut Writer<W>,
+    tag: &str,
+    list: &[Field<'_>],
+) -> std::io::Result<()> {
+    w.create_element(tag).write_inner_content(|w| {
+        for f in list {
+            data_array(w, "Float64", f.name, f.components, &join(f.values.iter()))?;
+        }
+        Ok(())
+    })?;
+    Ok(())
+}
+
 /// Serializes a grid as VTU XML.
 ///
 /// # Errors
@@ -142,30 +157,8 @@ pub fn vtu_string(g: &Grid<'_>) -> std::io::Result<String> {
                                     &join(g.cells.iter().map(|c| c.0)),
                                 )
                             })?;
-                            w.create_element("PointData").write_inner_content(|w| {
-                                for f in &g.point_data {
-                                    data_array(
-                                        w,
-                                        "Float64",
-                                        f.name,
-                                        f.components,
-                                        &join(f.values.iter()),
-                                    )?;
-                                }
-                                Ok(())
-                            })?;
-                            w.create_element("CellData").write_inner_content(|w| {
-                                for f in &g.cell_data {
-                                    data_array(
-                                        w,
-                                        "Float64",
-                                        f.name,
-                                        f.components,
-                                        &join(f.values.iter()),
-                                    )?;
-                                }
-                                Ok(())
-                            })?;
+                            fields(w, "PointData", &g.point_data)?;
+                            fields(w, "CellData", &g.cell_data)?;
                             Ok(())
                         })?;
                     Ok(())
