@@ -10,13 +10,16 @@
 //! iteration and without stored state:
 //!
 //! ```text
-//! active   (κP < −λ):  r_u = λ∇P,  r_λ = P,     K_uu = λ∇²P,  K_uλ = K_λuᵀ = ∇P,  K_λλ = 0
-//! inactive (otherwise): r_u = 0,    r_λ = λ/κ,   K_uu = 0,     K_uλ = K_λu = 0,    K_λλ = 1/κ
+//! active   (κP + λ ≤ 0): r_u = λ∇P,  r_λ = P,     K_uu = λ∇²P,  K_uλ = K_λuᵀ = ∇P,  K_λλ = 0
+//! inactive (otherwise):  r_u = 0,    r_λ = λ/κ,   K_uu = 0,     K_uλ = K_λu = 0,    K_λλ = 1/κ
 //! ```
 //!
 //! A node switches to active when it penetrates by more than its multiplier allows, and releases
-//! when its multiplier would pull (`λ > 0` drives `−λ` below `κP`). The caller detects cycling
-//! (a node switching back and forth) and freezes the set.
+//! when its multiplier would pull (`λ > 0` drives `−λ` below `κP`). The switch is `≤`, so a node
+//! touching with `P = 0` and `λ = 0` (bodies meshed in contact) starts active and a body held only
+//! by contact is supported from the first iteration. The caller detects cycling (a node switching
+//! back and forth) and freezes the set. For small sliding (`P` linear in `x`) the active block is
+//! built with a zero `λ∇²P` ([`MultiplierBlock::active`]).
 //!
 //! # Augmented Lagrangian (Uzawa)
 //! With a multiplier estimate `λ_k` held fixed during an equilibrium solve, the node's energy is
@@ -50,6 +53,43 @@ pub struct MultiplierBlock {
     pub k_lambdalambda: f64,
 }
 
+/// Whether the complementarity switch makes a node active: `κP + λ ≤ 0`.
+#[must_use]
+#[inline]
+pub fn wants_active(gap: f64, lambda: f64, kappa: f64) -> bool {
+    kappa * gap + lambda <= 0.0
+}
+
+impl MultiplierBlock {
+    /// The active block from the gap `P`, its gradient `∇P` and the geometric stiffness `λ∇²P`
+    /// (zero for small sliding).
+    #[must_use]
+    pub fn active(gap: f64, gradient: Vec12, geometric_stiffness: Mat12, lambda: f64) -> Self {
+        Self {
+            active: true,
+            residual_u: gradient * lambda,
+            residual_lambda: gap,
+            k_uu: geometric_stiffness,
+            k_ulambda: gradient,
+            k_lambdalambda: 0.0,
+        }
+    }
+
+    /// The inactive block, which drives `λ` to zero.
+    #[must_use]
+    pub fn inactive(lambda: f64, kappa: f64) -> Self {
+        let inv = 1.0 / kappa;
+        Self {
+            active: false,
+            residual_u: Vec12::zeros(),
+            residual_lambda: lambda * inv,
+            k_uu: Mat12::zeros(),
+            k_ulambda: Vec12::zeros(),
+            k_lambdalambda: inv,
+        }
+    }
+}
+
 /// The multiplier block of `pair` for multiplier `lambda` and scale `kappa > 0`.
 ///
 /// # Errors
@@ -59,30 +99,20 @@ pub fn multiplier_block(
     lambda: f64,
     kappa: f64,
 ) -> Result<MultiplierBlock, GeometryError> {
-    let gap = pair.gap();
-    if kappa * gap < -lambda {
+    if wants_active(pair.gap(), lambda, kappa) {
         let terms = crate::multiplier::multiplier(pair, lambda)?;
-        Ok(MultiplierBlock {
-            active: true,
-            residual_u: terms.jacobian * lambda,
-            residual_lambda: gap,
-            k_uu: terms.geometric_stiffness,
-            k_ulambda: terms.jacobian,
-            k_lambdalambda: 0.0,
-        })
+        return Ok(MultiplierBlock::active(
+            terms.constraint,
+            terms.jacobian,
+            terms.geometric_stiffness,
+            lambda,
+        ));
+    }
+    let block = MultiplierBlock::inactive(lambda, kappa);
+    if block.residual_lambda.is_finite() && block.k_lambdalambda.is_finite() {
+        Ok(block)
     } else {
-        let inv = 1.0 / kappa;
-        if !(lambda * inv).is_finite() {
-            return Err(GeometryError::Overflow);
-        }
-        Ok(MultiplierBlock {
-            active: false,
-            residual_u: Vec12::zeros(),
-            residual_lambda: lambda * inv,
-            k_uu: Mat12::zeros(),
-            k_ulambda: Vec12::zeros(),
-            k_lambdalambda: inv,
-        })
+        Err(GeometryError::Overflow)
     }
 }
 
