@@ -25,9 +25,8 @@
 //! The rule assumes penetrations small compared with the facet size, as contact enforcement keeps
 //! them.
 
-use crate::facet::Facet;
 use crate::linalg::Vec3;
-use crate::node_facet::{NodeFacet, project};
+use crate::node_facet::NodeFacet;
 use crate::search::{Bvh, Query, Surface};
 
 /// Tolerance on the barycentric coordinates for "the node projects into the facet": a node on a
@@ -55,23 +54,17 @@ pub fn choose_facet(
     let mut best: Option<(u32, NodeFacet)> = None;
     for hit in bvh.within(surface, &query, radius) {
         let [a, b, c] = surface.corners(hit.facet, positions);
-        let Ok(facet) = Facet::new(a, b, c) else {
+        let Ok(pair) = NodeFacet::new(a, b, c, x) else {
             continue;
         };
-        let Ok(projection) = project(&facet, &x) else {
-            continue;
-        };
-        if !projection.is_inside(PROJECTION_TOLERANCE) {
+        if !pair.projection.is_inside(PROJECTION_TOLERANCE) {
             continue;
         }
         let better = best.as_ref().is_none_or(|(f, p)| {
-            let (g, g_best) = (projection.gap.abs(), p.gap().abs());
+            let (g, g_best) = (pair.gap().abs(), p.gap().abs());
             g < g_best || (g == g_best && hit.facet < *f)
         });
         if better {
-            let Ok(pair) = NodeFacet::new(a, b, c, x) else {
-                continue;
-            };
             best = Some((hit.facet, pair));
         }
     }
