@@ -134,6 +134,19 @@ impl Analysis {
         3 * self.mesh.nodes.len()
     }
 
+    /// Reference coordinates and displacements of the nodes of mesh element `element`, taken from
+    /// the global displacement vector `u` (`3a + i`).
+    #[must_use]
+    pub fn element_state(&self, element: usize, u: &[f64]) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+        let nodes = &self.mesh.elements[element].nodes;
+        let x0 = nodes.iter().map(|&a| self.mesh.nodes[a]).collect();
+        let ue = nodes
+            .iter()
+            .map(|&a| [u[3 * a], u[3 * a + 1], u[3 * a + 2]])
+            .collect();
+        (x0, ue)
+    }
+
     /// Resolves the model, returning the analysis and every problem found.
     #[must_use]
     pub fn build(model: &Model, mut mesh: Mesh) -> (Self, Vec<FemError>) {

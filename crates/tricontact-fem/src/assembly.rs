@@ -299,12 +299,7 @@ pub fn assemble(
             .map(|be| {
                 let el = &an.mesh.elements[be.element];
                 let n = el.nodes.len();
-                let x0: Vec<[f64; 3]> = el.nodes.iter().map(|&a| an.mesh.nodes[a]).collect();
-                let ue: Vec<[f64; 3]> = el
-                    .nodes
-                    .iter()
-                    .map(|&a| [u[3 * a], u[3 * a + 1], u[3 * a + 2]])
-                    .collect();
+                let (x0, ue) = an.element_state(be.element, u);
                 let mut f = vec![0.0; 3 * n];
                 let mut k = if tangent {
                     vec![0.0; 9 * n * n]

@@ -42,12 +42,7 @@ pub fn stress_fields(an: &Analysis, u: &[f64], nlgeom: bool) -> StressFields {
         .par_iter()
         .map(|be| {
             let el = &an.mesh.elements[be.element];
-            let x0: Vec<[f64; 3]> = el.nodes.iter().map(|&a| an.mesh.nodes[a]).collect();
-            let ue: Vec<[f64; 3]> = el
-                .nodes
-                .iter()
-                .map(|&a| [u[3 * a], u[3 * a + 1], u[3 * a + 2]])
-                .collect();
+            let (x0, ue) = an.element_state(be.element, u);
             mean_cauchy_stress(
                 an.rule(el.kind),
                 &x0,
