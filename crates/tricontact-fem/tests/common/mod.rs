@@ -5,7 +5,7 @@ use std::path::Path;
 
 use tricontact_fem::analysis::{Analysis, Boundary};
 use tricontact_fem::assembly::NoExtra;
-use tricontact_fem::driver::{RunSummary, run};
+use tricontact_fem::driver::{IncrementInfo, RunSummary, run};
 use tricontact_fem::mesh::Mesh;
 use tricontact_fem::model::Model;
 use tricontact_fem::results::boundary_reactions;
@@ -30,11 +30,10 @@ pub struct Record {
     pub u: Vec<f64>,
 }
 
-/// Runs the analysis and records every increment.
-pub fn solve(an: &Analysis) -> (RunSummary, Vec<Record>) {
-    let mut records = Vec::new();
-    let summary = run(an, &mut NoExtra, &mut |info| {
-        records.push(Record {
+impl Record {
+    /// The record of one converged increment.
+    pub fn of(an: &Analysis, info: &IncrementInfo<'_>) -> Self {
+        Self {
             step: info.step,
             increment: info.increment,
             load_factor: info.load_factor,
@@ -43,7 +42,15 @@ pub fn solve(an: &Analysis) -> (RunSummary, Vec<Record>) {
             reference: info.reference,
             reactions: boundary_reactions(an, info.reactions),
             u: info.u.to_vec(),
-        });
+        }
+    }
+}
+
+/// Runs the analysis and records every increment.
+pub fn solve(an: &Analysis) -> (RunSummary, Vec<Record>) {
+    let mut records = Vec::new();
+    let summary = run(an, &mut NoExtra, &mut |info| {
+        records.push(Record::of(an, info));
         Ok(())
     })
     .expect("run succeeds");
@@ -116,16 +123,7 @@ pub fn solve_contact(
     let mut records = Vec::new();
     let mut notes = Vec::new();
     run(an, &mut terms, &mut |info| {
-        records.push(Record {
-            step: info.step,
-            increment: info.increment,
-            load_factor: info.load_factor,
-            iterations: info.iterations,
-            residuals: info.residuals.to_vec(),
-            reference: info.reference,
-            reactions: boundary_reactions(an, info.reactions),
-            u: info.u.to_vec(),
-        });
+        records.push(Record::of(an, info));
         notes.push(info.notes.to_vec());
         Ok(())
     })
