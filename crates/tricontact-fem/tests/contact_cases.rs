@@ -24,6 +24,13 @@ group = "upper_solid"
 material = "m"
 "#;
 
+/// A 0.5 × 0.5 × 0.25 hex8 block (2 × 2 × 1) centred on a 1 × 1 × 0.5 block of `lower` elements.
+fn small_blocks(lower: ElementKind) -> tricontact_fem::mesh::Mesh {
+    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], lower);
+    let u = box_mesh([0.5, 0.5, 0.25], [2, 2, 1], ElementKind::Hex8);
+    common::stack(&l, &u, [0.25, 0.25, 0.5])
+}
+
 fn contact(method: &str, extra: &str) -> String {
     format!(
         "[[contact]]\nslave = \"upper_zmin\"\nmaster = \"lower_zmax\"\nmethod = \"{method}\"\n{extra}\n"
@@ -82,9 +89,7 @@ fn interior_edge_and_vertex_nodes_get_the_same_force() {
 }
 
 fn press_release(method: &str) -> (Analysis, Vec<(f64, f64, Vec<f64>)>) {
-    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
-    let u = box_mesh([0.5, 0.5, 0.25], [2, 2, 1], ElementKind::Hex8);
-    let mesh = common::stack(&l, &u, [0.25, 0.25, 0.5]);
+    let mesh = small_blocks(ElementKind::Hex8);
     let text = format!(
         r#"{MAT}
 [[boundary]]
@@ -401,9 +406,7 @@ fn block_pressed_by_a_rigid_tool_without_volume_elements() {
     // The lower box has no body: its top face is a rigid master, moved up by 0.01 against a
     // block held at its top. The tool's nodes are fully prescribed; the contact force balances the
     // block's reaction.
-    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Tet4);
-    let u = box_mesh([0.5, 0.5, 0.25], [2, 2, 1], ElementKind::Hex8);
-    let mesh = common::stack(&l, &u, [0.25, 0.25, 0.5]);
+    let mesh = small_blocks(ElementKind::Tet4);
     let text = format!(
         "[[material]]\nname = \"m\"\ntype = \"linear_elastic\"\nE = 1000.0\nnu = 0.3\n[[body]]\ngroup = \"upper_solid\"\nmaterial = \"m\"\n[[boundary]]\ngroup = \"lower_zmax\"\ndisplacement = {{ x = 0.0, y = 0.0, z = 0.01 }}\n[[boundary]]\ngroup = \"upper_zmax\"\nfix = [\"x\", \"y\", \"z\"]\n{}[[step]]\nincrements = 2\n",
         contact("multiplier", "")
@@ -428,9 +431,7 @@ fn block_pressed_by_a_rigid_tool_without_volume_elements() {
         std::path::Path::new("m.toml"),
     )
     .expect("model");
-    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Tet4);
-    let u = box_mesh([0.5, 0.5, 0.25], [2, 2, 1], ElementKind::Hex8);
-    let e = Analysis::new(&model, common::stack(&l, &u, [0.25, 0.25, 0.5]))
+    let e = Analysis::new(&model, small_blocks(ElementKind::Tet4))
         .expect_err("under-prescribed tool")
         .to_string();
     assert!(e.contains("rigid contact surface"), "{e}");
@@ -438,9 +439,7 @@ fn block_pressed_by_a_rigid_tool_without_volume_elements() {
 
 #[test]
 fn contact_fields_and_history_columns_are_written() {
-    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
-    let u = box_mesh([0.5, 0.5, 0.25], [2, 2, 1], ElementKind::Hex8);
-    let mesh = common::stack(&l, &u, [0.25, 0.25, 0.5]);
+    let mesh = small_blocks(ElementKind::Hex8);
     let text = format!(
         "{MAT}[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n[[boundary]]\ngroup = \"upper_zmax\"\ndisplacement = {{ x = 0.0, y = 0.0, z = -0.01 }}\n{}[[step]]\n",
         contact("penalty", "")
