@@ -1,9 +1,10 @@
 //! The `tricontact` command-line solver.
 //!
-//! `tricontact run MODEL [--output DIR] [--verbose]` solves a model and
-//! writes VTU/PVD/history.csv; `tricontact check MODEL` parses and validates
-//! it and prints a summary with every problem found. Exit code 0 on
-//! success; on failure 1 with a one-line cause on stderr.
+//! `tricontact run MODEL [--output DIR] [--mesh FILE] [--verbose]` solves a model and
+//! writes VTU/PVD/history.csv/newton.csv (and the Hertz tables and PNG plots when the model
+//! asks); `tricontact check MODEL` parses and validates it and prints a summary with every
+//! problem found; `tricontact plot DIR...` overlays the Newton residuals of one increment of
+//! several result folders. Exit code 0 on success; on failure 1 with a one-line cause on stderr.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -15,6 +16,8 @@ use tricontact_fem::contact::ContactTerms;
 use tricontact_fem::driver::{self, IncrementInfo};
 use tricontact_fem::model::Model;
 use tricontact_fem::output::ResultWriter;
+use tricontact_fem::hertz::HertzSetup;
+use tricontact_fem::report::{self, RunRecord};
 use tricontact_fem::{FemError, gmsh, rigid};
 
 #[derive(Parser)]
@@ -37,6 +40,9 @@ enum Command {
         /// Result folder (default: `[output] folder` of the model).
         #[arg(long)]
         output: Option<PathBuf>,
+        /// Mesh file to use instead of `[mesh] file` (relative to the current folder).
+        #[arg(long)]
+        mesh: Option<PathBuf>,
         /// Print a one-line summary per increment.
         #[arg(long)]
         verbose: bool,
@@ -49,6 +55,29 @@ enum Command {
         /// Model file (TOML).
         model: PathBuf,
     },
+    /// Overlay the Newton residuals of one increment of several result folders (PNG).
+    Plot {
+        /// Result folders written by `tricontact run` (each holds `newton.csv`).
+        #[arg(required = true)]
+        folders: Vec<PathBuf>,
+        /// Increment to compare, `STEP:INCREMENT` (1-based; default: the last of each run).
+        #[arg(long, value_parser = parse_increment)]
+        increment: Option<(usize, usize)>,
+        /// Output PNG.
+        #[arg(long, short, default_value = "newton-compare.png")]
+        output: PathBuf,
+    },
+}
+
+fn parse_increment(s: &str) -> Result<(usize, usize), String> {
+    let bad = || format!("'{s}': expected STEP:INCREMENT, e.g. 1:5");
+    let (a, b) = s.split_once(':').ok_or_else(bad)?;
+    let step = a.trim().parse().map_err(|_| bad())?;
+    let inc = b.trim().parse().map_err(|_| bad())?;
+    if step == 0 || inc == 0 {
+        return Err(bad());
+    }
+    Ok((step, inc))
 }
 
 fn main() -> ExitCode {
@@ -57,11 +86,19 @@ fn main() -> ExitCode {
         Command::Run {
             model,
             output,
+            mesh,
             verbose,
             threads,
         } => set_threads(threads)
-            .and_then(|()| run(&model, output, verbose).map_err(|e| e.to_string())),
+            .and_then(|()| run(&model, output, mesh, verbose).map_err(|e| e.to_string())),
         Command::Check { model } => check(&model).map_err(|e| e.to_string()),
+        Command::Plot {
+            folders,
+            increment,
+            output,
+        } => report::compare_newton(&folders, increment, &output)
+            .map(|()| println!("wrote {}", output.display()))
+            .map_err(|e| e.to_string()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -111,10 +148,25 @@ fn increment_line(info: &IncrementInfo<'_>) -> String {
     )
 }
 
-fn run(model_path: &Path, output: Option<PathBuf>, verbose: bool) -> Result<(), FemError> {
-    let model = Model::load(model_path)?;
+fn run(
+    model_path: &Path,
+    output: Option<PathBuf>,
+    mesh_override: Option<PathBuf>,
+    verbose: bool,
+) -> Result<(), FemError> {
+    let mut model = Model::load(model_path)?;
+    if let Some(m) = mesh_override {
+        let cwd = std::env::current_dir().map_err(|e| FemError::io(".", e))?;
+        model.mesh.file = cwd.join(m);
+    }
     let mesh = gmsh::read_msh(&model.mesh_path())?;
     let an = Analysis::new(&model, mesh)?;
+    let hertz = model
+        .hertz
+        .as_ref()
+        .map(|h| HertzSetup::resolve(h, &an))
+        .transpose()?;
+    let mut record = RunRecord::new(hertz);
     let dir = output.unwrap_or_else(|| model.output_dir());
     let stem = model_path
         .file_stem()
@@ -134,6 +186,10 @@ fn run(model_path: &Path, output: Option<PathBuf>, verbose: bool) -> Result<(), 
     let mut contact = ContactTerms::new(&an);
     let summary = driver::run(&an, &mut contact, &mut |info| {
         writer.write(&an, info)?;
+        record.record(&an, info);
+        if an.output.history {
+            record.write_tables(&dir)?;
+        }
         pb.set_position((info.time * 1000.0).round() as u64);
         pb.set_message(format!("step {} t={:.3}", info.step + 1, info.load_factor));
         if verbose {
@@ -153,6 +209,13 @@ fn run(model_path: &Path, output: Option<PathBuf>, verbose: bool) -> Result<(), 
     });
     pb.finish_and_clear();
     let summary = summary?;
+    for line in record.contact_summary().into_iter().chain(record.hertz_summary()) {
+        println!("{line}");
+    }
+    if an.output.plots {
+        let plots = record.write_plots(&dir)?;
+        println!("plots: {}", plots.iter().map(|p| p.file_name().unwrap_or_default().to_string_lossy()).collect::<Vec<_>>().join(", "));
+    }
     println!(
         "done: {} increments, {} Newton iterations, {} cutbacks; results in {}",
         summary.increments,
@@ -190,6 +253,11 @@ fn check(model_path: &Path) -> Result<(), FemError> {
         active,
         3 * active
     );
+    if let Some(h) = &model.hertz
+        && let Err(e) = HertzSetup::resolve(h, &an)
+    {
+        problems.push(e);
+    }
     for pair in &an.contacts {
         let facets: usize = pair.passes.iter().map(|p| p.surface.len()).sum();
         println!(

@@ -38,6 +38,8 @@ pub struct Model {
     /// Result files.
     #[serde(default)]
     pub output: OutputDef,
+    /// Comparison of a contact pair with Hertz theory (optional).
+    pub hertz: Option<HertzDef>,
     /// Folder of the model file (set by [`Model::load`]).
     #[serde(skip)]
     pub base_dir: PathBuf,
@@ -255,6 +257,36 @@ pub struct OutputDef {
     /// Write a `.vtu` every `every`-th increment (the last of each step always).
     #[serde(default = "one")]
     pub every: usize,
+    /// Write PNG plots (Newton residuals, contact force, Hertz comparison) at the end of the run.
+    #[serde(default)]
+    pub plots: bool,
+}
+
+/// `[hertz]`: compare a contact pair with Hertz theory for a sphere on a flat.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct HertzDef {
+    /// Contact pair `slave-master` (default: the only pair).
+    pub contact: Option<String>,
+    /// Sphere radius `R`.
+    pub radius: f64,
+    /// Contact modulus `E*` (default: `E/(1 − ν²)` of the slave body, master rigid).
+    pub modulus: Option<f64>,
+    /// Point of first contact; radii are measured from the axis through it.
+    #[serde(default)]
+    pub centre: [f64; 3],
+    /// Load axis, pointing from the flat into the sphere.
+    #[serde(default = "default_axis")]
+    pub axis: [f64; 3],
+    /// The model is `1/symmetry` of the full contact (quarter model: 4).
+    #[serde(default = "one")]
+    pub symmetry: usize,
+    /// Group whose mean displacement against `axis` is reported as the approach.
+    pub loaded: String,
+}
+
+fn default_axis() -> [f64; 3] {
+    [0.0, 0.0, 1.0]
 }
 
 fn default_folder() -> PathBuf {
@@ -274,6 +306,7 @@ impl Default for OutputDef {
             vtu: true,
             history: true,
             every: 1,
+            plots: false,
         }
     }
 }

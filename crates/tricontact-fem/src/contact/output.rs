@@ -11,7 +11,8 @@
 //!
 //! History columns per pair `<slave>-<master>`: `_normal_force` (`Σ −λ` over all slave nodes and
 //! passes), `_active` (closed nodes), `_max_penetration` (`max(0, −P)` over closed nodes), `_area`
-//! (lumped area of the closed nodes).
+//! (lumped area of the closed nodes), `_min_pressure` and `_max_pressure` (`contact_pressure` over
+//! the closed slave nodes that have an area; 0 when there are none).
 
 use super::ContactTerms;
 
@@ -62,6 +63,7 @@ impl ContactTerms {
         let mut out = Vec::new();
         for (p, pair) in self.pairs.iter().enumerate() {
             let (mut force, mut active, mut pen, mut area) = (0.0, 0usize, 0.0f64, 0.0);
+            let (mut p_min, mut p_max) = (f64::INFINITY, 0.0f64);
             for (q, pass) in pair.passes.iter().enumerate() {
                 for (j, st) in self.committed[p][q].iter().enumerate() {
                     force -= st.lambda;
@@ -69,6 +71,13 @@ impl ContactTerms {
                         active += 1;
                         pen = pen.max(-st.gap);
                         area += pass.areas[j];
+                        let s = pass.slaves[j];
+                        if self.areas[s] > 0.0 {
+                            let f = &self.committed_force[3 * s..3 * s + 3];
+                            let p = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt() / self.areas[s];
+                            p_min = p_min.min(p);
+                            p_max = p_max.max(p);
+                        }
                     }
                 }
             }
@@ -76,6 +85,8 @@ impl ContactTerms {
             out.push((format!("{}_active", pair.name), active as f64));
             out.push((format!("{}_max_penetration", pair.name), pen));
             out.push((format!("{}_area", pair.name), area));
+            out.push((format!("{}_min_pressure", pair.name), p_min.min(p_max)));
+            out.push((format!("{}_max_pressure", pair.name), p_max));
         }
         out
     }

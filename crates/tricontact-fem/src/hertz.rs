@@ -1,0 +1,372 @@
+//! Hertz theory for an elastic sphere pressed on a flat, and the measurement of a contact pair
+//! against it (the `[hertz]` table of a model).
+//!
+//! Theory (sphere radius `R`, total force `F`, contact modulus `E*` with
+//! `1/E* = (1 − ν₁²)/E₁ + (1 − ν₂²)/E₂`, so `E* = E/(1 − ν²)` on a rigid flat):
+//!
+//! ```text
+//! a = (3 F R / (4 E*))^(1/3)      contact radius
+//! p0 = 3 F / (2 π a²)             peak pressure,   p(r) = p0 √(1 − r²/a²)
+//! δ = a² / R = k F^(2/3),  k = (9 / (16 R E*²))^(1/3)    approach of distant points
+//! ```
+//!
+//! Measurement at a converged increment:
+//! * `F` = `symmetry` × the pair's normal force (`Σ −λ`; a quarter model has `symmetry = 4`);
+//! * the profile is `(r, p)` over the closed slave nodes: `r` the distance of the deformed node
+//!   from the axis through `centre`, `p` the nodal `contact_pressure` (force over lumped area);
+//! * the fitted profile: `p² = p0² − (p0²/a²) r²` is linear in `r²`, so a linear least-squares fit
+//!   `p² ≈ c₀ + c₁ r²` gives `p0 = √c₀` and `a = √(−c₀/c₁)` — the contact radius and peak
+//!   pressure the mesh predicts, free of the node spacing at the contact edge;
+//! * the largest nodal pressure is reported beside the fitted `p0`;
+//! * the approach is `−ū·axis`, `ū` the mean displacement of the `loaded` group. It includes the
+//!   bulk compliance of the finite body, which Hertz's `δ` excludes, so the force–approach curve
+//!   is fitted as `δ = k F^(2/3) + c F` (least squares over the increments) and the fitted `k` is
+//!   compared with Hertz's; `c` is the bulk compliance.
+
+use crate::analysis::Analysis;
+use crate::driver::IncrementInfo;
+use crate::error::{FemError, Result};
+use crate::model::HertzDef;
+
+/// Hertz theory for one sphere on a flat.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hertz {
+    /// Sphere radius `R`.
+    pub radius: f64,
+    /// Contact modulus `E*`.
+    pub modulus: f64,
+}
+
+impl Hertz {
+    /// Contact radius `a(F)`.
+    #[must_use]
+    pub fn contact_radius(&self, force: f64) -> f64 {
+        (3.0 * force * self.radius / (4.0 * self.modulus)).cbrt()
+    }
+
+    /// Peak pressure `p0(F)`.
+    #[must_use]
+    pub fn peak_pressure(&self, force: f64) -> f64 {
+        let a = self.contact_radius(force);
+        3.0 * force / (2.0 * std::f64::consts::PI * a * a)
+    }
+
+    /// Pressure `p(r)` under the force `F` (0 outside the contact).
+    #[must_use]
+    pub fn pressure(&self, force: f64, r: f64) -> f64 {
+        let a = self.contact_radius(force);
+        self.peak_pressure(force) * (1.0 - (r / a).powi(2)).max(0.0).sqrt()
+    }
+
+    /// Coefficient `k` of `δ = k F^(2/3)`.
+    #[must_use]
+    pub fn approach_coefficient(&self) -> f64 {
+        (9.0 / (16.0 * self.radius * self.modulus * self.modulus)).cbrt()
+    }
+
+    /// Approach `δ(F) = a²/R`.
+    #[must_use]
+    pub fn approach(&self, force: f64) -> f64 {
+        self.approach_coefficient() * force.max(0.0).powf(2.0 / 3.0)
+    }
+}
+
+/// Least-squares fit of `p² = c₀ + c₁ r²` over `(r, p)`: `(a, p0)`, or `None` with fewer than
+/// three points or a profile that does not fall with `r`.
+#[must_use]
+pub fn fit_profile(profile: &[(f64, f64)]) -> Option<(f64, f64)> {
+    let pts: Vec<(f64, f64)> = profile.iter().map(|&(r, p)| (r * r, p * p)).collect();
+    let (c0, c1) = linear_fit(&pts, |_| 1.0, |x| x)?;
+    (pts.len() >= 3 && c0 > 0.0 && c1 < 0.0).then(|| ((-c0 / c1).sqrt(), c0.sqrt()))
+}
+
+/// Least-squares fit of `δ = k F^(2/3) + c F` over `(F, δ)`: `(k, c)`, or `None` with fewer than
+/// two distinct forces.
+#[must_use]
+pub fn fit_approach(samples: &[(f64, f64)]) -> Option<(f64, f64)> {
+    linear_fit(samples, |f| f.max(0.0).powf(2.0 / 3.0), |f| f)
+}
+
+/// Least squares `y ≈ c₀ g₀(x) + c₁ g₁(x)` by the 2×2 normal equations, scaled so the
+/// determinant test is relative.
+fn linear_fit(
+    pts: &[(f64, f64)],
+    g0: impl Fn(f64) -> f64,
+    g1: impl Fn(f64) -> f64,
+) -> Option<(f64, f64)> {
+    let (mut a00, mut a01, mut a11, mut b0, mut b1) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for &(x, y) in pts {
+        let (u, v) = (g0(x), g1(x));
+        a00 += u * u;
+        a01 += u * v;
+        a11 += v * v;
+        b0 += u * y;
+        b1 += v * y;
+    }
+    let det = a00 * a11 - a01 * a01;
+    if !(det > 1e-12 * a00 * a11) {
+        return None;
+    }
+    Some(((a11 * b0 - a01 * b1) / det, (a00 * b1 - a01 * b0) / det))
+}
+
+/// The resolved `[hertz]` table.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HertzSetup {
+    /// The theory.
+    pub theory: Hertz,
+    /// History column of the pair's normal force.
+    pub force_column: String,
+    /// Point of first contact.
+    pub centre: [f64; 3],
+    /// Unit load axis.
+    pub axis: [f64; 3],
+    /// Symmetry factor.
+    pub symmetry: f64,
+    /// Nodes of the loaded group.
+    pub loaded: Vec<usize>,
+}
+
+fn invalid(message: String) -> FemError {
+    FemError::Invalid(vec![format!("[hertz] {message}")])
+}
+
+impl HertzSetup {
+    /// Resolves the table against the analysis.
+    ///
+    /// # Errors
+    /// Unknown pair or group, no unique pair, non-positive radius or modulus, zero axis,
+    /// zero symmetry.
+    pub fn resolve(def: &HertzDef, an: &Analysis) -> Result<Self> {
+        let names: Vec<&str> = an.contacts.iter().map(|p| p.name.as_str()).collect();
+        let pair = match &def.contact {
+            Some(name) => an.contacts.iter().find(|p| &p.name == name).ok_or_else(|| {
+                invalid(format!(
+                    "contact: no pair '{name}' (pairs: {})",
+                    names.join(", ")
+                ))
+            })?,
+            None if an.contacts.len() == 1 => &an.contacts[0],
+            None => {
+                return Err(invalid(format!(
+                    "contact: name the pair, the model has {} (pairs: {})",
+                    an.contacts.len(),
+                    names.join(", ")
+                )));
+            }
+        };
+        let group = an
+            .mesh
+            .group(&def.loaded)
+            .ok_or_else(|| invalid(format!("loaded: {}", unknown_group(an, &def.loaded))))?;
+        let modulus = match def.modulus {
+            Some(m) => m,
+            None => slave_modulus(an, pair.passes[0].slaves.first().copied())
+                .ok_or_else(|| invalid("modulus: no body element at the slave nodes".into()))?,
+        };
+        let norm = def.axis.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if !(def.radius > 0.0 && modulus > 0.0 && norm > 0.0 && def.symmetry > 0) {
+            return Err(invalid(format!(
+                "needs radius > 0, modulus > 0, a non-zero axis and symmetry ≥ 1 (got radius {}, modulus {modulus}, |axis| {norm}, symmetry {})",
+                def.radius, def.symmetry
+            )));
+        }
+        Ok(Self {
+            theory: Hertz {
+                radius: def.radius,
+                modulus,
+            },
+            force_column: format!("{}_normal_force", pair.name),
+            centre: def.centre,
+            axis: def.axis.map(|x| x / norm),
+            symmetry: def.symmetry as f64,
+            loaded: group.nodes.clone(),
+        })
+    }
+
+    /// Measures one converged increment.
+    #[must_use]
+    pub fn measure(&self, an: &Analysis, info: &IncrementInfo<'_>) -> HertzSample {
+        let field = |name: &str| {
+            info.point_fields
+                .iter()
+                .find(|(n, _, _)| n == name)
+                .map(|(_, _, v)| v.as_slice())
+        };
+        let force = self.symmetry
+            * info
+                .history
+                .iter()
+                .find(|(n, _)| n == &self.force_column)
+                .map_or(0.0, |(_, v)| *v);
+        let mut profile = Vec::new();
+        if let (Some(status), Some(pressure)) = (field("contact_status"), field("contact_pressure"))
+        {
+            for (a, node) in an.mesh.nodes.iter().enumerate() {
+                if status[a] > 0.5 {
+                    let x: [f64; 3] = std::array::from_fn(|i| node[i] + info.u[3 * a + i]);
+                    profile.push((self.radial_distance(x), pressure[a]));
+                }
+            }
+        }
+        profile.sort_by(|p, q| p.0.total_cmp(&q.0));
+        let approach = if self.loaded.is_empty() {
+            0.0
+        } else {
+            -self
+                .loaded
+                .iter()
+                .map(|&a| (0..3).map(|i| info.u[3 * a + i] * self.axis[i]).sum::<f64>())
+                .sum::<f64>()
+                / self.loaded.len() as f64
+        };
+        HertzSample {
+            step: info.step,
+            increment: info.increment,
+            iterations: info.iterations,
+            force,
+            approach,
+            fit: fit_profile(&profile),
+            max_pressure: profile.iter().map(|p| p.1).fold(0.0, f64::max),
+            profile,
+        }
+    }
+
+    /// Distance of `x` from the axis through the centre.
+    fn radial_distance(&self, x: [f64; 3]) -> f64 {
+        let d: [f64; 3] = std::array::from_fn(|i| x[i] - self.centre[i]);
+        let along: f64 = (0..3).map(|i| d[i] * self.axis[i]).sum();
+        (0..3)
+            .map(|i| (d[i] - along * self.axis[i]).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    }
+}
+
+fn unknown_group(an: &Analysis, name: &str) -> String {
+    format!(
+        "unknown group '{name}' (groups in the mesh: {})",
+        an.mesh.group_list()
+    )
+}
+
+/// `E/(1 − ν²)` of the material of a body element holding `node`.
+fn slave_modulus(an: &Analysis, node: Option<usize>) -> Option<f64> {
+    let node = node?;
+    let body = an
+        .body
+        .iter()
+        .find(|b| an.mesh.elements[b.element].nodes.contains(&node))?;
+    let m = &an.materials[body.material];
+    let (lambda, mu) = (m.lambda, m.mu);
+    let e = mu * (3.0 * lambda + 2.0 * mu) / (lambda + mu);
+    let nu = lambda / (2.0 * (lambda + mu));
+    Some(e / (1.0 - nu * nu))
+}
+
+/// One increment measured against Hertz theory.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HertzSample {
+    /// Step index (0-based).
+    pub step: usize,
+    /// Increment within the step.
+    pub increment: usize,
+    /// Newton iterations of the increment.
+    pub iterations: usize,
+    /// Total force (symmetry applied).
+    pub force: f64,
+    /// Approach of the loaded group.
+    pub approach: f64,
+    /// `(r, p)` of the closed slave nodes, by increasing `r`.
+    pub profile: Vec<(f64, f64)>,
+    /// Fitted `(a, p0)`.
+    pub fit: Option<(f64, f64)>,
+    /// Largest nodal pressure.
+    pub max_pressure: f64,
+}
+
+/// Relative errors of a sample against Hertz at the sample's own force.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HertzErrors {
+    /// Hertz contact radius at the computed force.
+    pub radius: f64,
+    /// Hertz peak pressure at the computed force.
+    pub peak: f64,
+    /// Fitted contact radius / Hertz − 1 (NaN without a fit).
+    pub fit_radius: f64,
+    /// Fitted p0 / Hertz − 1 (NaN without a fit).
+    pub fit_peak: f64,
+    /// Largest nodal pressure / Hertz p0 − 1.
+    pub max_pressure: f64,
+}
+
+impl HertzSample {
+    /// Errors against `theory`.
+    #[must_use]
+    pub fn errors(&self, theory: &Hertz) -> HertzErrors {
+        let a = theory.contact_radius(self.force);
+        let p0 = theory.peak_pressure(self.force);
+        let (fa, fp) = self.fit.unwrap_or((f64::NAN, f64::NAN));
+        HertzErrors {
+            radius: a,
+            peak: p0,
+            fit_radius: fa / a - 1.0,
+            fit_peak: fp / p0 - 1.0,
+            max_pressure: self.max_pressure / p0 - 1.0,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const STEEL: Hertz = Hertz {
+        radius: 20.0,
+        modulus: 210_000.0 / 0.91,
+    };
+
+    #[test]
+    fn theory_is_self_consistent() {
+        let f = 20_000.0;
+        let a = STEEL.contact_radius(f);
+        // δ = a²/R and F = ∫ p dA = 2π p0 a²/3.
+        assert!((STEEL.approach(f) - a * a / STEEL.radius).abs() < 1e-14 * a);
+        let p0 = STEEL.peak_pressure(f);
+        assert!((2.0 * std::f64::consts::PI * p0 * a * a / 3.0 - f).abs() < 1e-9 * f);
+        assert!((STEEL.pressure(f, 0.6 * a) - 0.8 * p0).abs() < 1e-12 * p0);
+        assert_eq!(STEEL.pressure(f, 1.01 * a), 0.0);
+    }
+
+    #[test]
+    fn fits_recover_exact_data() {
+        let f = 20_000.0;
+        let a = STEEL.contact_radius(f);
+        let profile: Vec<(f64, f64)> = (0..9)
+            .map(|i| {
+                let r = 0.11 * a * f64::from(i);
+                (r, STEEL.pressure(f, r))
+            })
+            .collect();
+        let (fa, fp) = fit_profile(&profile).expect("fit");
+        assert!((fa / a - 1.0).abs() < 1e-10 && (fp / STEEL.peak_pressure(f) - 1.0).abs() < 1e-10);
+        let c = 3e-6;
+        let curve: Vec<(f64, f64)> = (1..6)
+            .map(|i| {
+                let f = 4000.0 * f64::from(i);
+                (f, STEEL.approach(f) + c * f)
+            })
+            .collect();
+        let (k, cc) = fit_approach(&curve).expect("fit");
+        assert!((k / STEEL.approach_coefficient() - 1.0).abs() < 1e-9);
+        assert!((cc / c - 1.0).abs() < 1e-8);
+    }
+
+    #[test]
+    fn degenerate_fits_are_none() {
+        assert_eq!(fit_profile(&[(0.0, 1.0), (0.1, 1.0)]), None);
+        assert_eq!(fit_profile(&[(0.0, 1.0), (0.1, 1.1), (0.2, 1.2)]), None);
+        assert_eq!(fit_approach(&[(1.0, 1.0)]), None);
+        assert_eq!(fit_approach(&[]), None);
+    }
+}

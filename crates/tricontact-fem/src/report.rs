@@ -1,0 +1,429 @@
+//! Per-run records beside the VTU files: Newton residuals, contact force history and the Hertz
+//! comparison, as CSV tables and (with `[output] plots = true`) PNG charts.
+//!
+//! Files (all atomic):
+//! * `newton.csv` — `step,increment,iteration,relative_residual` for every converged increment,
+//!   iteration 0 being the predictor (the residual the increment starts from);
+//! * `hertz.csv` — one row per increment when the model has a `[hertz]` table (see
+//!   [`crate::hertz`]), `hertz_profile.csv` — `r, p, p_hertz` of the last increment;
+//! * `newton.png` (relative residual per iteration, log scale, the last eight increments),
+//!   `contact_force.png` (normal force of each pair against time), `hertz_pressure.png` (nodal
+//!   pressure against `r` with Hertz and the fitted profile) and `hertz_force_approach.png`
+//!   (measured approach, approach minus the fitted bulk compliance, and Hertz's `δ(F)`).
+//!
+//! [`compare_newton`] overlays one increment of several result folders (`tricontact plot`).
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use crate::analysis::Analysis;
+use crate::atomic::write_atomic;
+use crate::driver::IncrementInfo;
+use crate::error::{FemError, Result};
+use crate::hertz::{HertzSample, HertzSetup, fit_approach};
+use crate::plots::{Axes, Series, chart};
+
+/// Residual history of one increment.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NewtonLog {
+    /// Step index (0-based).
+    pub step: usize,
+    /// Increment within the step (1-based).
+    pub increment: usize,
+    /// Relative residuals: predictor, then each iteration.
+    pub relative: Vec<f64>,
+}
+
+/// What a run records for its tables and plots.
+#[derive(Clone, Debug, Default)]
+pub struct RunRecord {
+    /// Residual histories.
+    pub newton: Vec<NewtonLog>,
+    /// `(time, [(pair column, normal force)])` per increment.
+    pub forces: Vec<(f64, Vec<(String, f64)>)>,
+    /// The Hertz comparison, when asked for.
+    pub hertz: Option<(HertzSetup, Vec<HertzSample>)>,
+    /// History columns of the extra terms at the last increment.
+    pub last: Vec<(String, f64)>,
+}
+
+impl RunRecord {
+    /// An empty record; `hertz` enables the Hertz comparison.
+    #[must_use]
+    pub fn new(hertz: Option<HertzSetup>) -> Self {
+        Self {
+            hertz: hertz.map(|h| (h, Vec::new())),
+            ..Self::default()
+        }
+    }
+
+    /// Records a converged increment.
+    pub fn record(&mut self, an: &Analysis, info: &IncrementInfo<'_>) {
+        let scale = if info.reference > 0.0 {
+            info.reference
+        } else {
+            1.0
+        };
+        self.newton.push(NewtonLog {
+            step: info.step,
+            increment: info.increment,
+            relative: info.residuals.iter().map(|r| r / scale).collect(),
+        });
+        let forces = info
+            .history
+            .iter()
+            .filter(|(n, _)| n.ends_with("_normal_force"))
+            .cloned()
+            .collect();
+        self.forces.push((info.time, forces));
+        self.last = info.history.to_vec();
+        if let Some((setup, samples)) = &mut self.hertz {
+            samples.push(setup.measure(an, info));
+        }
+    }
+
+    /// Writes `newton.csv` and, with a Hertz comparison, `hertz.csv` and `hertz_profile.csv`.
+    ///
+    /// # Errors
+    /// File errors.
+    pub fn write_tables(&self, dir: &Path) -> Result<Vec<PathBuf>> {
+        let mut csv = String::from("step,increment,iteration,relative_residual\n");
+        for log in &self.newton {
+            for (k, r) in log.relative.iter().enumerate() {
+                let _ = writeln!(csv, "{},{},{k},{r:e}", log.step + 1, log.increment);
+            }
+        }
+        let mut written = vec![dir.join("newton.csv")];
+        write_atomic(&written[0], csv.as_bytes())?;
+        if let Some((setup, samples)) = &self.hertz {
+            let path = dir.join("hertz.csv");
+            write_atomic(&path, hertz_table(setup, samples).as_bytes())?;
+            written.push(path);
+            if let Some(last) = samples.last() {
+                let mut csv = String::from("r,p,p_hertz\n");
+                for &(r, p) in &last.profile {
+                    let ph = setup.theory.pressure(last.force, r);
+                    let _ = writeln!(csv, "{r:e},{p:e},{ph:e}");
+                }
+                let path = dir.join("hertz_profile.csv");
+                write_atomic(&path, csv.as_bytes())?;
+                written.push(path);
+            }
+        }
+        Ok(written)
+    }
+
+    /// One line per contact pair at the last increment: normal force, closed nodes, pressure
+    /// range and largest penetration.
+    #[must_use]
+    pub fn contact_summary(&self) -> Vec<String> {
+        let get = |name: &str| {
+            self.last
+                .iter()
+                .find(|(n, _)| n == name)
+                .map_or(f64::NAN, |(_, v)| *v)
+        };
+        self.last
+            .iter()
+            .filter_map(|(n, _)| n.strip_suffix("_normal_force"))
+            .map(|pair| {
+                format!(
+                    "contact {pair}: normal force {:.6e}, {} closed nodes, pressure {:.6e} … {:.6e}, largest penetration {:.3e}",
+                    get(&format!("{pair}_normal_force")),
+                    get(&format!("{pair}_active")),
+                    get(&format!("{pair}_min_pressure")),
+                    get(&format!("{pair}_max_pressure")),
+                    get(&format!("{pair}_max_penetration")),
+                )
+            })
+            .collect()
+    }
+
+    /// Lines summarising the Hertz comparison of the last increment and the approach fit.
+    #[must_use]
+    pub fn hertz_summary(&self) -> Vec<String> {
+        let Some((setup, samples)) = &self.hertz else {
+            return Vec::new();
+        };
+        let Some(last) = samples.last() else {
+            return Vec::new();
+        };
+        let e = last.errors(&setup.theory);
+        let (fa, fp) = last.fit.unwrap_or((f64::NAN, f64::NAN));
+        let mut lines = vec![
+            format!(
+                "hertz: force {:.6e}, {} closed nodes; contact radius fit {fa:.5e} vs {:.5e} ({:+.2} %)",
+                last.force,
+                last.profile.len(),
+                e.radius,
+                100.0 * e.fit_radius
+            ),
+            format!(
+                "hertz: peak pressure fit {fp:.5e} vs {:.5e} ({:+.2} %), largest nodal {:.5e} ({:+.2} %)",
+                e.peak,
+                100.0 * e.fit_peak,
+                last.max_pressure,
+                100.0 * e.max_pressure
+            ),
+        ];
+        if let Some((k, c)) = approach_fit(samples) {
+            let kh = setup.theory.approach_coefficient();
+            lines.push(format!(
+                "hertz: approach = k F^(2/3) + c F with k {k:.5e} vs Hertz {kh:.5e} ({:+.2} %), bulk compliance c {c:.4e}",
+                100.0 * (k / kh - 1.0)
+            ));
+        }
+        lines
+    }
+
+    /// Writes the PNG charts.
+    ///
+    /// # Errors
+    /// Drawing or file errors.
+    pub fn write_plots(&self, dir: &Path) -> Result<Vec<PathBuf>> {
+        let mut written = Vec::new();
+        let path = dir.join("newton.png");
+        let start = self.newton.len().saturating_sub(8);
+        let series: Vec<Series> = self.newton[start..].iter().map(newton_series).collect();
+        let axes = Axes {
+            title: "Newton convergence",
+            x: "iteration",
+            y: "relative residual",
+            log_y: true,
+            legend_low: false,
+        };
+        chart(&path, &axes, &series)?;
+        written.push(path);
+        if self.forces.iter().any(|(_, f)| !f.is_empty()) {
+            let path = dir.join("contact_force.png");
+            chart(&path, &force_axes(), &self.force_series())?;
+            written.push(path);
+        }
+        if let Some((setup, samples)) = &self.hertz {
+            written.extend(hertz_plots(dir, setup, samples)?);
+        }
+        Ok(written)
+    }
+
+    fn force_series(&self) -> Vec<Series> {
+        let names: Vec<String> = self
+            .forces
+            .first()
+            .map(|(_, f)| f.iter().map(|(n, _)| n.clone()).collect())
+            .unwrap_or_default();
+        names
+            .iter()
+            .enumerate()
+            .map(|(k, name)| {
+                let pts = self
+                    .forces
+                    .iter()
+                    .filter_map(|(t, f)| f.get(k).map(|v| (*t, v.1)))
+                    .collect();
+                Series::line(name.trim_end_matches("_normal_force"), pts)
+            })
+            .collect()
+    }
+}
+
+fn force_axes() -> Axes<'static> {
+    Axes {
+        title: "Contact normal force",
+        x: "time (step + load factor)",
+        y: "normal force",
+        log_y: false,
+        legend_low: true,
+    }
+}
+
+fn newton_series(log: &NewtonLog) -> Series {
+    let pts = log
+        .relative
+        .iter()
+        .enumerate()
+        .map(|(k, &r)| (k as f64, r))
+        .collect();
+    Series::line(
+        format!("step {} inc {}", log.step + 1, log.increment),
+        pts,
+    )
+}
+
+fn approach_fit(samples: &[HertzSample]) -> Option<(f64, f64)> {
+    let pts: Vec<(f64, f64)> = samples.iter().map(|s| (s.force, s.approach)).collect();
+    fit_approach(&pts)
+}
+
+fn hertz_table(setup: &HertzSetup, samples: &[HertzSample]) -> String {
+    let mut csv = String::from(
+        "step,increment,iterations,force,approach,closed_nodes,hertz_radius,fit_radius,radius_error,hertz_p0,fit_p0,p0_error,max_pressure,max_pressure_error\n",
+    );
+    for s in samples {
+        let e = s.errors(&setup.theory);
+        let (fa, fp) = s.fit.unwrap_or((f64::NAN, f64::NAN));
+        let _ = writeln!(
+            csv,
+            "{},{},{},{:e},{:e},{},{:e},{fa:e},{:e},{:e},{fp:e},{:e},{:e},{:e}",
+            s.step + 1,
+            s.increment,
+            s.iterations,
+            s.force,
+            s.approach,
+            s.profile.len(),
+            e.radius,
+            e.fit_radius,
+            e.peak,
+            e.fit_peak,
+            s.max_pressure,
+            e.max_pressure
+        );
+    }
+    csv
+}
+
+fn hertz_plots(dir: &Path, setup: &HertzSetup, samples: &[HertzSample]) -> Result<Vec<PathBuf>> {
+    let Some(last) = samples.last() else {
+        return Ok(Vec::new());
+    };
+    let theory = &setup.theory;
+    let a = theory.contact_radius(last.force);
+    let r_max = last.profile.last().map_or(a, |p| p.0).max(a) * 1.05;
+    let curve = |f: &dyn Fn(f64) -> f64| -> Vec<(f64, f64)> {
+        (0..=200)
+            .map(|i| {
+                let r = r_max * f64::from(i) / 200.0;
+                (r, f(r))
+            })
+            .collect()
+    };
+    let mut series = vec![
+        Series::points("nodal pressure", last.profile.clone()),
+        Series::line(
+            format!("Hertz, F = {:.4e}", last.force),
+            curve(&|r| theory.pressure(last.force, r)),
+        ),
+    ];
+    if let Some((fa, fp)) = last.fit {
+        series.push(Series::line(
+            "least-squares Hertz profile",
+            curve(&|r| fp * (1.0 - (r / fa).powi(2)).max(0.0).sqrt()),
+        ));
+    }
+    let p_path = dir.join("hertz_pressure.png");
+    let axes = Axes {
+        title: "Contact pressure against Hertz",
+        x: "distance from the axis r",
+        y: "pressure p",
+        log_y: false,
+        legend_low: false,
+    };
+    chart(&p_path, &axes, &series)?;
+    let f_max = samples.iter().map(|s| s.force).fold(0.0, f64::max);
+    let mut series = vec![
+        Series::points(
+            "approach of the loaded face",
+            samples.iter().map(|s| (s.force, s.approach)).collect(),
+        ),
+        Series::line(
+            "Hertz δ(F)",
+            (0..=100)
+                .map(|i| {
+                    let f = f_max * f64::from(i) / 100.0;
+                    (f, theory.approach(f))
+                })
+                .collect(),
+        ),
+    ];
+    if let Some((_, c)) = approach_fit(samples) {
+        series.insert(
+            1,
+            Series::points(
+                "minus fitted bulk compliance c F",
+                samples
+                    .iter()
+                    .map(|s| (s.force, s.approach - c * s.force))
+                    .collect(),
+            ),
+        );
+    }
+    let d_path = dir.join("hertz_force_approach.png");
+    let axes = Axes {
+        title: "Force against approach",
+        x: "total force F",
+        y: "approach",
+        log_y: false,
+        legend_low: true,
+    };
+    chart(&d_path, &axes, &series)?;
+    Ok(vec![p_path, d_path])
+}
+
+/// Reads `newton.csv` of a result folder.
+///
+/// # Errors
+/// Missing or malformed file (the message names file and line).
+pub fn read_newton(dir: &Path) -> Result<Vec<NewtonLog>> {
+    let path = dir.join("newton.csv");
+    let text = std::fs::read_to_string(&path).map_err(|e| FemError::io(&path, e))?;
+    let mut logs: Vec<NewtonLog> = Vec::new();
+    for (n, line) in text.lines().enumerate().skip(1) {
+        let bad = || FemError::Output(format!("{}:{}: malformed row '{line}'", path.display(), n + 1));
+        let cols: Vec<&str> = line.split(',').collect();
+        let [step, inc, _, r] = cols.as_slice() else {
+            return Err(bad());
+        };
+        let step: usize = step.parse().map_err(|_| bad())?;
+        let increment: usize = inc.parse().map_err(|_| bad())?;
+        let r: f64 = r.parse().map_err(|_| bad())?;
+        match logs.last_mut() {
+            Some(l) if l.step + 1 == step && l.increment == increment => l.relative.push(r),
+            _ => logs.push(NewtonLog {
+                step: step.checked_sub(1).ok_or_else(bad)?,
+                increment,
+                relative: vec![r],
+            }),
+        }
+    }
+    Ok(logs)
+}
+
+/// Overlays the residual history of one increment (`step`, `increment`, 1-based; the last
+/// increment of the run when `None`) of each result folder, labelled by folder name.
+///
+/// # Errors
+/// Unreadable folders, a missing increment, drawing errors.
+pub fn compare_newton(
+    dirs: &[PathBuf],
+    pick: Option<(usize, usize)>,
+    out: &Path,
+) -> Result<()> {
+    let mut series = Vec::new();
+    for dir in dirs {
+        let logs = read_newton(dir)?;
+        let log = match pick {
+            Some((s, i)) => logs.iter().find(|l| l.step + 1 == s && l.increment == i),
+            None => logs.last(),
+        }
+        .ok_or_else(|| {
+            FemError::Output(format!(
+                "{}: no increment {} in newton.csv",
+                dir.display(),
+                pick.map_or("(empty file)".into(), |(s, i)| format!("{i} of step {s}"))
+            ))
+        })?;
+        let name = dir
+            .file_name()
+            .map_or_else(|| dir.display().to_string(), |n| n.to_string_lossy().into_owned());
+        let mut s = newton_series(log);
+        s.label = format!("{name} (step {} inc {})", log.step + 1, log.increment);
+        series.push(s);
+    }
+    let axes = Axes {
+        title: "Newton convergence",
+        x: "iteration",
+        y: "relative residual",
+        log_y: true,
+        legend_low: false,
+    };
+    chart(out, &axes, &series)
+}
