@@ -14,9 +14,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 use tricontact_fem::analysis::Analysis;
 use tricontact_fem::contact::ContactTerms;
 use tricontact_fem::driver::{self, IncrementInfo};
+use tricontact_fem::hertz::HertzSetup;
 use tricontact_fem::model::Model;
 use tricontact_fem::output::ResultWriter;
-use tricontact_fem::hertz::HertzSetup;
 use tricontact_fem::report::{self, RunRecord};
 use tricontact_fem::{FemError, gmsh, rigid};
 
@@ -209,12 +209,23 @@ fn run(
     });
     pb.finish_and_clear();
     let summary = summary?;
-    for line in record.contact_summary().into_iter().chain(record.hertz_summary()) {
+    for line in record
+        .contact_summary()
+        .into_iter()
+        .chain(record.hertz_summary())
+    {
         println!("{line}");
     }
     if an.output.plots {
         let plots = record.write_plots(&dir)?;
-        println!("plots: {}", plots.iter().map(|p| p.file_name().unwrap_or_default().to_string_lossy()).collect::<Vec<_>>().join(", "));
+        println!(
+            "plots: {}",
+            plots
+                .iter()
+                .map(|p| p.file_name().unwrap_or_default().to_string_lossy())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
     }
     println!(
         "done: {} increments, {} Newton iterations, {} cutbacks; results in {}",

@@ -140,12 +140,16 @@ impl HertzSetup {
     pub fn resolve(def: &HertzDef, an: &Analysis) -> Result<Self> {
         let names: Vec<&str> = an.contacts.iter().map(|p| p.name.as_str()).collect();
         let pair = match &def.contact {
-            Some(name) => an.contacts.iter().find(|p| &p.name == name).ok_or_else(|| {
-                invalid(format!(
-                    "contact: no pair '{name}' (pairs: {})",
-                    names.join(", ")
-                ))
-            })?,
+            Some(name) => an
+                .contacts
+                .iter()
+                .find(|p| &p.name == name)
+                .ok_or_else(|| {
+                    invalid(format!(
+                        "contact: no pair '{name}' (pairs: {})",
+                        names.join(", ")
+                    ))
+                })?,
             None if an.contacts.len() == 1 => &an.contacts[0],
             None => {
                 return Err(invalid(format!(
@@ -216,7 +220,11 @@ impl HertzSetup {
             -self
                 .loaded
                 .iter()
-                .map(|&a| (0..3).map(|i| info.u[3 * a + i] * self.axis[i]).sum::<f64>())
+                .map(|&a| {
+                    (0..3)
+                        .map(|i| info.u[3 * a + i] * self.axis[i])
+                        .sum::<f64>()
+                })
                 .sum::<f64>()
                 / self.loaded.len() as f64
         };

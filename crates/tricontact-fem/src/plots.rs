@@ -102,7 +102,11 @@ fn range(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
     if log {
         return (lo.floor(), hi.ceil().max(lo.floor() + 1.0));
     }
-    let pad = if hi > lo { 0.05 * (hi - lo) } else { 0.5 * hi.abs().max(1.0) };
+    let pad = if hi > lo {
+        0.05 * (hi - lo)
+    } else {
+        0.5 * hi.abs().max(1.0)
+    };
     (lo - pad, hi + pad)
 }
 
@@ -112,7 +116,11 @@ fn tick(v: f64) -> String {
     if a != 0.0 && !(1e-3..1e5).contains(&a) {
         return format!("{v:.2e}");
     }
-    let digits = if a >= 1.0 { 3 - (a.log10().floor() as i32).min(3) } else { 4 };
+    let digits = if a >= 1.0 {
+        3 - (a.log10().floor() as i32).min(3)
+    } else {
+        4
+    };
     let s = format!("{v:.*}", digits.max(0) as usize);
     if s.contains('.') {
         s.trim_end_matches('0').trim_end_matches('.').to_string()
@@ -162,7 +170,8 @@ pub fn chart(path: &Path, axes: &Axes<'_>, series: &[Series]) -> Result<()> {
             .x_label_formatter(&lin_label)
             .y_label_formatter(&lin_label);
         if axes.log_y {
-            mesh.y_labels((y1 - y0) as usize + 1).y_label_formatter(&log_label);
+            mesh.y_labels((y1 - y0) as usize + 1)
+                .y_label_formatter(&log_label);
         }
         mesh.draw().map_err(|e| plot_error(path, e))?;
         for (k, (s, pts)) in series.iter().zip(&data).enumerate() {
@@ -213,7 +222,10 @@ mod tests {
             legend_low: false,
         };
         let series = [
-            Series::line("inc 1", vec![(0.0, 1.0), (1.0, 1e-3), (2.0, 1e-9), (3.0, 0.0)]),
+            Series::line(
+                "inc 1",
+                vec![(0.0, 1.0), (1.0, 1e-3), (2.0, 1e-9), (3.0, 0.0)],
+            ),
             Series::points("nan", vec![(f64::NAN, 1.0), (1.0, f64::INFINITY)]),
         ];
         chart(&path, &axes, &series).expect("chart");

@@ -243,10 +243,7 @@ fn newton_series(log: &NewtonLog) -> Series {
         .enumerate()
         .map(|(k, &r)| (k as f64, r))
         .collect();
-    Series::line(
-        format!("step {} inc {}", log.step + 1, log.increment),
-        pts,
-    )
+    Series::line(format!("step {} inc {}", log.step + 1, log.increment), pts)
 }
 
 fn approach_fit(samples: &[HertzSample]) -> Option<(f64, f64)> {
@@ -367,7 +364,13 @@ pub fn read_newton(dir: &Path) -> Result<Vec<NewtonLog>> {
     let text = std::fs::read_to_string(&path).map_err(|e| FemError::io(&path, e))?;
     let mut logs: Vec<NewtonLog> = Vec::new();
     for (n, line) in text.lines().enumerate().skip(1) {
-        let bad = || FemError::Output(format!("{}:{}: malformed row '{line}'", path.display(), n + 1));
+        let bad = || {
+            FemError::Output(format!(
+                "{}:{}: malformed row '{line}'",
+                path.display(),
+                n + 1
+            ))
+        };
         let cols: Vec<&str> = line.split(',').collect();
         let [step, inc, _, r] = cols.as_slice() else {
             return Err(bad());
@@ -392,11 +395,7 @@ pub fn read_newton(dir: &Path) -> Result<Vec<NewtonLog>> {
 ///
 /// # Errors
 /// Unreadable folders, a missing increment, drawing errors.
-pub fn compare_newton(
-    dirs: &[PathBuf],
-    pick: Option<(usize, usize)>,
-    out: &Path,
-) -> Result<()> {
+pub fn compare_newton(dirs: &[PathBuf], pick: Option<(usize, usize)>, out: &Path) -> Result<()> {
     let mut series = Vec::new();
     for dir in dirs {
         let logs = read_newton(dir)?;
@@ -411,9 +410,10 @@ pub fn compare_newton(
                 pick.map_or("(empty file)".into(), |(s, i)| format!("{i} of step {s}"))
             ))
         })?;
-        let name = dir
-            .file_name()
-            .map_or_else(|| dir.display().to_string(), |n| n.to_string_lossy().into_owned());
+        let name = dir.file_name().map_or_else(
+            || dir.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        );
         let mut s = newton_series(log);
         s.label = format!("{name} (step {} inc {})", log.step + 1, log.increment);
         series.push(s);

@@ -74,7 +74,8 @@ impl ContactTerms {
                         let s = pass.slaves[j];
                         if self.areas[s] > 0.0 {
                             let f = &self.committed_force[3 * s..3 * s + 3];
-                            let p = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt() / self.areas[s];
+                            let p =
+                                (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt() / self.areas[s];
                             p_min = p_min.min(p);
                             p_max = p_max.max(p);
                         }

@@ -130,3 +130,43 @@ pub fn solve_contact(
     .expect("run succeeds");
     (terms, records, notes)
 }
+
+/// Runs `examples/<dir>/<model>` (with `mesh` instead of its `[mesh] file` when given) as
+/// `tricontact run` does, recording what the CLI records; nothing is written.
+pub fn run_example(
+    dir: &str,
+    model: &str,
+    mesh: Option<&str>,
+) -> (RunSummary, tricontact_fem::report::RunRecord) {
+    let folder = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples")
+        .join(dir);
+    let mut m = Model::load(&folder.join(model)).expect("example model");
+    if let Some(mesh) = mesh {
+        m.mesh.file = folder.join(mesh);
+    }
+    let mesh = tricontact_fem::gmsh::read_msh(&m.mesh_path()).expect("example mesh");
+    let an = Analysis::new(&m, mesh).expect("example analysis");
+    let hertz = m
+        .hertz
+        .as_ref()
+        .map(|h| tricontact_fem::hertz::HertzSetup::resolve(h, &an).expect("[hertz] resolves"));
+    let mut record = tricontact_fem::report::RunRecord::new(hertz);
+    let mut terms = tricontact_fem::contact::ContactTerms::new(&an);
+    let summary = run(&an, &mut terms, &mut |info| {
+        record.record(&an, info);
+        Ok(())
+    })
+    .expect("example runs");
+    (summary, record)
+}
+
+/// A history column of the last increment of a record.
+pub fn last_column(record: &tricontact_fem::report::RunRecord, name: &str) -> f64 {
+    record
+        .last
+        .iter()
+        .find(|(n, _)| n == name)
+        .map(|(_, v)| *v)
+        .unwrap_or_else(|| panic!("no history column {name}"))
+}

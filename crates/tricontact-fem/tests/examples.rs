@@ -1,0 +1,84 @@
+//! The patch and sliding examples run as documented in VERIFICATION.md.
+//!
+//! * patch (examples/patch): on matching meshes every slave node carries the applied pressure
+//!   1.0 — to round-off with multipliers and the augmented Lagrangian, within the penalty's
+//!   compliance error (about `p h/(10 E h)`-relative, a few percent) with a penalty; on
+//!   non-matching meshes the single-pass node-to-facet method is known not to pass, so the
+//!   measured spread is bounded (a regression guard) and two passes must reduce it;
+//! * sliding (examples/sliding): the normal force of a block slid frictionlessly over a flat,
+//!   triangulated base stays constant while the slave nodes cross facets.
+
+mod common;
+
+use common::{last_column, run_example};
+
+const PAIR: &str = "upper_zmin-lower_zmax";
+
+/// `(min, max)` slave pressure and total normal force of a patch run.
+fn patch(model: &str, mesh: &str) -> (f64, f64, f64) {
+    let (_, record) = run_example("patch", model, Some(mesh));
+    (
+        last_column(&record, &format!("{PAIR}_min_pressure")),
+        last_column(&record, &format!("{PAIR}_max_pressure")),
+        last_column(&record, &format!("{PAIR}_normal_force")),
+    )
+}
+
+#[test]
+fn patch_matching_meshes() {
+    for (model, tol) in [
+        ("multiplier.toml", 1e-9),
+        ("augmented.toml", 1e-9),
+        ("penalty.toml", 0.03),
+    ] {
+        let (lo, hi, f) = patch(model, "matching-hex.msh");
+        println!("{model}: pressure {lo} … {hi}, force {f}");
+        assert!((f - 1.0).abs() < 1e-9, "{model}: force {f}");
+        assert!(
+            (lo - 1.0).abs() < tol && (hi - 1.0).abs() < tol,
+            "{model}: {lo} … {hi}"
+        );
+    }
+}
+
+#[test]
+fn patch_nonmatching_meshes() {
+    for mesh in ["nonmatching-hex.msh", "nonmatching-tet.msh"] {
+        let (lo, hi, f) = patch("penalty.toml", mesh);
+        let (lo2, hi2, f2) = patch("two-pass.toml", mesh);
+        println!("{mesh}: single pass {lo} … {hi}, two pass {lo2} … {hi2}");
+        assert!(
+            (f - 1.0).abs() < 1e-6 && (f2 - 1.0).abs() < 1e-6,
+            "force {f}, {f2}"
+        );
+        assert!(lo > 0.6 && hi < 1.15, "{mesh}: single pass {lo} … {hi}");
+        assert!(
+            hi2 - lo2 < 0.6 * (hi - lo),
+            "{mesh}: two passes do not help"
+        );
+        let (lo, hi, _) = patch("multiplier.toml", mesh);
+        assert!(lo > 0.6 && hi < 1.15, "{mesh}: multiplier {lo} … {hi}");
+    }
+}
+
+#[test]
+fn sliding_keeps_the_normal_force() {
+    let (summary, record) = run_example("sliding", "model.toml", None);
+    assert_eq!(summary.cutbacks, 0);
+    let slide: Vec<f64> = record
+        .forces
+        .iter()
+        .filter(|(t, _)| *t > 1.0)
+        .map(|(_, f)| f[0].1)
+        .collect();
+    let mean = slide.iter().sum::<f64>() / slide.len() as f64;
+    let spread = slide.iter().map(|f| (f - mean).abs()).fold(0.0, f64::max) / mean;
+    println!(
+        "sliding: {} increments, mean force {mean}, spread {spread}",
+        slide.len()
+    );
+    assert!(slide.len() >= 20 && mean > 0.0);
+    assert!(spread < 0.01, "normal force varies by {spread}");
+    let iterations = summary.iterations as f64 / summary.increments as f64;
+    assert!(iterations < 8.0, "{iterations} iterations per increment");
+}

@@ -1,0 +1,88 @@
+//! Hertz contact (examples/hertz): a steel sphere pressed on a rigid flat, quarter model, run
+//! from the example model files on the coarse and medium meshes with each enforcement method.
+//! Checks, against Hertz theory at the computed force: the fitted contact radius and peak pressure
+//! on the medium mesh within the targets (3 %, 5 %), the errors falling from coarse to
+//! medium, the force near the nominal 20 kN, and the fitted approach coefficient within 5 %.
+
+mod common;
+
+use tricontact_fem::hertz::{HertzErrors, fit_approach};
+
+struct Outcome {
+    errors: HertzErrors,
+    force: f64,
+    approach_error: f64,
+    iterations: Vec<usize>,
+}
+
+fn run(method: &str, level: &str) -> Outcome {
+    let mesh = format!("hertz-{level}.msh");
+    let (_, record) = common::run_example("hertz", &format!("{method}.toml"), Some(&mesh));
+    let (setup, samples) = record.hertz.as_ref().expect("hertz record");
+    let last = samples.last().expect("increments");
+    let curve: Vec<(f64, f64)> = samples.iter().map(|s| (s.force, s.approach)).collect();
+    let (k, _) = fit_approach(&curve).expect("approach fit");
+    Outcome {
+        errors: last.errors(&setup.theory),
+        force: last.force,
+        approach_error: k / setup.theory.approach_coefficient() - 1.0,
+        iterations: samples.iter().map(|s| s.iterations).collect(),
+    }
+}
+
+fn check_method(method: &str) {
+    let coarse = run(method, "coarse");
+    let medium = run(method, "medium");
+    for (name, o) in [("coarse", &coarse), ("medium", &medium)] {
+        println!(
+            "{method} {name}: F {:.1}, radius {:+.3} %, p0 {:+.3} %, max nodal {:+.3} %, k {:+.3} %, iterations {:?}",
+            o.force,
+            100.0 * o.errors.fit_radius,
+            100.0 * o.errors.fit_peak,
+            100.0 * o.errors.max_pressure,
+            100.0 * o.approach_error,
+            o.iterations
+        );
+        assert!(
+            (o.force / 20_000.0 - 1.0).abs() < 0.05,
+            "{method} {name}: force {}",
+            o.force
+        );
+        assert!(o.iterations.iter().all(|&n| n <= 12), "{method} {name}");
+    }
+    let e = &medium.errors;
+    assert!(
+        e.fit_radius.abs() < 0.03,
+        "{method}: radius {}",
+        e.fit_radius
+    );
+    assert!(e.fit_peak.abs() < 0.05, "{method}: p0 {}", e.fit_peak);
+    assert!(medium.approach_error.abs() < 0.05, "{method}: approach");
+    assert!(
+        e.fit_radius.abs() < coarse.errors.fit_radius.abs(),
+        "{method}: radius not refined"
+    );
+    assert!(
+        e.fit_peak.abs() < coarse.errors.fit_peak.abs(),
+        "{method}: p0 not refined"
+    );
+    assert!(
+        medium.approach_error.abs() < coarse.approach_error.abs(),
+        "{method}: approach not refined"
+    );
+}
+
+#[test]
+fn hertz_multiplier() {
+    check_method("multiplier");
+}
+
+#[test]
+fn hertz_penalty() {
+    check_method("penalty");
+}
+
+#[test]
+fn hertz_augmented() {
+    check_method("augmented");
+}
