@@ -188,3 +188,155 @@ fn contact_example_checks() {
     );
     assert!(stdout.contains("no problems found"), "{stdout}");
 }
+
+fn examples_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples")
+}
+
+fn run_ok(args: &[&std::ffi::OsStr]) -> String {
+    let o = bin().args(args).output().expect("runs");
+    assert!(
+        o.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+#[test]
+fn hertz_coarse_writes_tables_plots_and_summary() {
+    let out = temp_dir("hertz");
+    let ex = examples_dir().join("hertz");
+    let mut runs = Vec::new();
+    for method in ["multiplier", "penalty"] {
+        let dir = out.join(method);
+        let stdout = run_ok(&[
+            "run".as_ref(),
+            ex.join(format!("{method}.toml")).as_os_str(),
+            "--mesh".as_ref(),
+            ex.join("hertz-coarse.msh").as_os_str(),
+            "--output".as_ref(),
+            dir.as_os_str(),
+        ]);
+        assert!(stdout.contains("hertz: force"), "{stdout}");
+        assert!(
+            stdout.contains("contact contact-flat: normal force"),
+            "{stdout}"
+        );
+        for f in [
+            "hertz.csv",
+            "hertz_profile.csv",
+            "newton.csv",
+            "newton.png",
+            "contact_force.png",
+            "hertz_pressure.png",
+            "hertz_force_approach.png",
+        ] {
+            assert!(dir.join(f).is_file(), "{method}: {f} missing");
+        }
+        let table = std::fs::read_to_string(dir.join("hertz.csv")).expect("hertz.csv");
+        assert_eq!(table.lines().count(), 9, "header + 8 increments");
+        runs.push(dir);
+    }
+    // `plot` overlays one increment of both runs; a missing increment is an error naming it.
+    let png = out.join("compare.png");
+    let stdout = run_ok(&[
+        "plot".as_ref(),
+        runs[0].as_os_str(),
+        runs[1].as_os_str(),
+        "--increment".as_ref(),
+        "1:8".as_ref(),
+        "--output".as_ref(),
+        png.as_os_str(),
+    ]);
+    assert!(stdout.contains("wrote"), "{stdout}");
+    assert_eq!(&std::fs::read(&png).expect("png")[1..4], b"PNG");
+    let o = bin()
+        .args([
+            "plot".as_ref(),
+            runs[0].as_os_str(),
+            "--increment".as_ref(),
+            "1:99".as_ref(),
+        ])
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && stderr.contains("no increment 99 of step 1"),
+        "{stderr}"
+    );
+    let o = bin()
+        .args([
+            "plot".as_ref(),
+            runs[0].as_os_str(),
+            "--increment".as_ref(),
+            "8".as_ref(),
+        ])
+        .output()
+        .expect("runs");
+    assert!(!o.status.success());
+    let o = bin()
+        .args(["plot".as_ref(), out.join("nothing").as_os_str()])
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && stderr.contains("newton.csv"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&out).ok();
+}
+
+#[test]
+fn hertz_table_errors_name_the_key() {
+    let out = temp_dir("hertz-bad");
+    let ex = examples_dir().join("hertz");
+    let text = std::fs::read_to_string(ex.join("multiplier.toml")).expect("model");
+    let mesh = ex.join("hertz-coarse.msh");
+    let base = text.replace(
+        "file = \"hertz-fine.msh\"",
+        &format!("file = {:?}", mesh.to_str().expect("utf8")),
+    );
+    for (from, to, expect) in [
+        (
+            "loaded = \"top\"",
+            "loaded = \"lid\"",
+            "[hertz] loaded: unknown group 'lid'",
+        ),
+        (
+            "radius = 20.0",
+            "radius = -20.0",
+            "[hertz] needs radius > 0",
+        ),
+        (
+            "radius = 20.0",
+            "radius = 20.0\nradious = 1.0",
+            "unknown field `radious`",
+        ),
+        (
+            "symmetry = 4 ",
+            "contact = \"a-b\"\nsymmetry = 4 ",
+            "[hertz] contact: no pair 'a-b' (pairs: contact-flat)",
+        ),
+    ] {
+        assert!(base.contains(from), "{from}");
+        let model = out.join("bad.toml");
+        std::fs::write(&model, base.replace(from, to)).expect("write");
+        for cmd in ["check", "run"] {
+            let o = bin()
+                .args([cmd.as_ref(), model.as_os_str()])
+                .output()
+                .expect("runs");
+            let text = format!(
+                "{}{}",
+                String::from_utf8_lossy(&o.stdout),
+                String::from_utf8_lossy(&o.stderr)
+            );
+            assert!(
+                !o.status.success() && text.contains(expect),
+                "{cmd}: {text}"
+            );
+        }
+    }
+    std::fs::remove_dir_all(&out).ok();
+}

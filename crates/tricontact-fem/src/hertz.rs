@@ -18,10 +18,14 @@
 //!   `p² ≈ c₀ + c₁ r²` gives `p0 = √c₀` and `a = √(−c₀/c₁)` — the contact radius and peak
 //!   pressure the mesh predicts, free of the node spacing at the contact edge;
 //! * the largest nodal pressure is reported beside the fitted `p0`;
-//! * the approach is `−ū·axis`, `ū` the mean displacement of the `loaded` group. It includes the
-//!   bulk compliance of the finite body, which Hertz's `δ` excludes, so the force–approach curve
-//!   is fitted as `δ = k F^(2/3) + c F` (least squares over the increments) and the fitted `k` is
-//!   compared with Hertz's; `c` is the bulk compliance.
+//! * the approach is `−ū·axis`, `ū` the mean displacement of the `loaded` group. Hertz's `δ` is
+//!   the approach of points infinitely far away in a half-space; the loaded face of a finite body
+//!   differs from it by terms linear in `F`: the compliance of the body beyond the contact zone
+//!   (positive) minus the part of Hertz's far field beyond the face (Boussinesq, on the axis at
+//!   depth `z`: `(1 + ν)(3 − 2ν) F / (2π E z)`, about `1.2·10⁻⁷ F` for the steel sphere at
+//!   `z = R`). So the force–approach curve is fitted as `δ = k F^(2/3) + c F` (least squares over
+//!   the increments) and the fitted `k` is compared with Hertz's; `c`, the linear remainder, may
+//!   have either sign.
 
 use crate::analysis::Analysis;
 use crate::driver::IncrementInfo;
@@ -104,7 +108,7 @@ fn linear_fit(
         b1 += v * y;
     }
     let det = a00 * a11 - a01 * a01;
-    if !(det > 1e-12 * a00 * a11) {
+    if det.is_nan() || det <= 1e-12 * a00 * a11 {
         return None;
     }
     Some(((a11 * b0 - a01 * b1) / det, (a00 * b1 - a01 * b0) / det))
@@ -169,7 +173,8 @@ impl HertzSetup {
                 .ok_or_else(|| invalid("modulus: no body element at the slave nodes".into()))?,
         };
         let norm = def.axis.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if !(def.radius > 0.0 && modulus > 0.0 && norm > 0.0 && def.symmetry > 0) {
+        let positive = |x: f64| x > 0.0 && x.is_finite();
+        if !positive(def.radius) || !positive(modulus) || !positive(norm) || def.symmetry == 0 {
             return Err(invalid(format!(
                 "needs radius > 0, modulus > 0, a non-zero axis and symmetry ≥ 1 (got radius {}, modulus {modulus}, |axis| {norm}, symmetry {})",
                 def.radius, def.symmetry

@@ -9,7 +9,7 @@
 //! * `newton.png` (relative residual per iteration, log scale, the last eight increments),
 //!   `contact_force.png` (normal force of each pair against time), `hertz_pressure.png` (nodal
 //!   pressure against `r` with Hertz and the fitted profile) and `hertz_force_approach.png`
-//!   (measured approach, approach minus the fitted bulk compliance, and Hertz's `δ(F)`).
+//!   (measured approach, approach minus the fitted linear term `c F`, and Hertz's `δ(F)`).
 //!
 //! [`compare_newton`] overlays one increment of several result folders (`tricontact plot`).
 
@@ -169,7 +169,7 @@ impl RunRecord {
         if let Some((k, c)) = approach_fit(samples) {
             let kh = setup.theory.approach_coefficient();
             lines.push(format!(
-                "hertz: approach = k F^(2/3) + c F with k {k:.5e} vs Hertz {kh:.5e} ({:+.2} %), bulk compliance c {c:.4e}",
+                "hertz: approach = k F^(2/3) + c F with k {k:.5e} vs Hertz {kh:.5e} ({:+.2} %), linear term c {c:.4e}",
                 100.0 * (k / kh - 1.0)
             ));
         }
@@ -335,7 +335,7 @@ fn hertz_plots(dir: &Path, setup: &HertzSetup, samples: &[HertzSample]) -> Resul
         series.insert(
             1,
             Series::points(
-                "minus fitted bulk compliance c F",
+                "minus the fitted linear term c F",
                 samples
                     .iter()
                     .map(|s| (s.force, s.approach - c * s.force))
