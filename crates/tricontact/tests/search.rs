@@ -271,3 +271,86 @@ fn bad_surfaces_are_errors() {
             .is_none()
     );
 }
+
+/// Every hint — the answer, a neighbour, a facet far away, a degenerate facet, an excluded facet,
+/// an index out of range — gives the unhinted (brute-force) answer, ties included.
+#[test]
+fn hints_never_change_the_answer() {
+    let (mut nodes, mut facets) = grid(6, 0.5);
+    // A degenerate facet (three collinear nodes) above the grid.
+    let base = u32::try_from(nodes.len()).unwrap();
+    nodes.extend([
+        Vec3::new(0.5, 0.5, 0.2),
+        Vec3::new(1.0, 1.0, 0.2),
+        Vec3::new(1.5, 1.5, 0.2),
+    ]);
+    facets.push([base, base + 1, base + 2]);
+    let degenerate = u32::try_from(facets.len() - 1).unwrap();
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    let far = 0;
+    let mut checked = 0;
+    for j in 0..=12 {
+        for i in 0..=12 {
+            for z in [0.0, 0.4, -0.1] {
+                let point = Vec3::new(f64::from(i) * 0.25, f64::from(j) * 0.25, z);
+                let node = u32::try_from(j / 2 * 7 + i / 2).unwrap();
+                for q in [
+                    Query::point(point),
+                    Query {
+                        point,
+                        exclude: Some(node),
+                    },
+                ] {
+                    for max in [f64::INFINITY, 0.2] {
+                        let reference = brute_force_closest(&surface, &nodes, &q, max);
+                        let answer = reference.map(|h| h.facet);
+                        let hints = [
+                            answer,
+                            answer.map(|f| f ^ 1),
+                            Some(far),
+                            Some(degenerate),
+                            Some(
+                                surface
+                                    .facets()
+                                    .iter()
+                                    .position(|f| f.contains(&node))
+                                    .unwrap() as u32,
+                            ),
+                            Some(u32::MAX),
+                            None,
+                        ];
+                        for hint in hints {
+                            same(bvh.closest_with_hint(&surface, &q, hint, max), reference)
+                                .unwrap();
+                            checked += 1;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert_eq!(checked, 13 * 13 * 3 * 2 * 2 * 7);
+}
+
+/// Chunked hinting in `closest_all` leaves every answer as the unhinted query gives it, in
+/// coherent and in shuffled order, with and without a distance limit.
+#[test]
+fn closest_all_with_hints_matches_single_queries() {
+    let (nodes, facets) = soup(3000, 9);
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    let mut r = scenes::uniform(4);
+    let queries: Vec<Query> = (0..2000)
+        .map(|_| Query::point(Vec3::new(r(), r(), r())))
+        .collect();
+    for max in [f64::INFINITY, 0.02] {
+        let all = bvh.closest_all(&surface, &queries, max);
+        for (q, hit) in queries.iter().zip(&all) {
+            same(*hit, bvh.closest(&surface, q, max)).unwrap();
+        }
+        for (q, hit) in queries.iter().zip(&all).step_by(10) {
+            same(*hit, brute_force_closest(&surface, &nodes, q, max)).unwrap();
+        }
+    }
+}

@@ -13,6 +13,7 @@
 pub mod aabb;
 pub mod bvh;
 pub mod incremental;
+pub(crate) mod lanes;
 pub mod layout;
 pub mod morton;
 pub(crate) mod node;
@@ -23,5 +24,5 @@ pub mod surface;
 pub use aabb::Aabb;
 pub use bvh::{Bvh, LEAF_SIZE, REBUILD_RATIO, Update};
 pub use incremental::{IncrementalStats, MAX_STEPS};
-pub use query::{Hit, Query, brute_force_closest, measure, sort_hits};
+pub use query::{HINT_CHUNK, Hit, Query, brute_force_closest, measure, sort_hits};
 pub use surface::{Surface, SurfaceError};
