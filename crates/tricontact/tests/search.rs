@@ -354,3 +354,64 @@ fn closest_all_with_hints_matches_single_queries() {
         }
     }
 }
+
+/// Coherent batches go through packets (one gathering for 16 consecutive queries): on a tie grid,
+/// queries in row order on vertices, edges and faces at mixed heights, with a far query now and
+/// then (its answer lies beyond the gathering radius: a fallback, then a large radius), with and
+/// without self-exclusion and a search distance, all equal brute force.
+#[test]
+fn packets_match_brute_force_on_ties_and_fallbacks() {
+    let (nodes, facets) = grid(16, 0.5);
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    let heights = [0.0, 0.3, -0.2, 0.05];
+    let mut points = Vec::new();
+    for j in 0..=32 {
+        for i in 0..=64 {
+            let k = points.len();
+            let z = if k % 37 == 36 { 3.0 } else { heights[k % 4] };
+            points.push(Vec3::new(f64::from(i) * 0.125, f64::from(j) * 0.25, z));
+        }
+    }
+    let node_at = |p: &Vec3| {
+        let (i, j) = ((p.x / 0.5).round(), (p.y / 0.5).round());
+        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+        let n = (j as u32) * 17 + i as u32;
+        n
+    };
+    for exclude in [false, true] {
+        let queries: Vec<Query> = points
+            .iter()
+            .map(|p| Query {
+                point: *p,
+                exclude: exclude.then(|| node_at(p)),
+            })
+            .collect();
+        for max in [f64::INFINITY, 0.25] {
+            let all = bvh.closest_all(&surface, &queries, max);
+            for (q, hit) in queries.iter().zip(&all) {
+                same(*hit, brute_force_closest(&surface, &nodes, q, max)).unwrap();
+            }
+        }
+    }
+}
+
+/// Packets on a random soup, with queries sorted by cells so that consecutive ones are close.
+#[test]
+fn packets_match_brute_force_on_a_sorted_soup() {
+    let (nodes, facets) = soup(4000, 21);
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    let mut r = scenes::uniform(8);
+    let mut points: Vec<Vec3> = (0..3000).map(|_| Vec3::new(r(), r(), 0.2 * r())).collect();
+    // By cells of 0.1 × 0.1: 16 consecutive points lie in one or two cells.
+    let cell = |p: &Vec3| ((10.0 * p.y).floor(), (10.0 * p.x).floor());
+    points.sort_by(|a, b| cell(a).partial_cmp(&cell(b)).unwrap());
+    let queries: Vec<Query> = points.into_iter().map(Query::point).collect();
+    for max in [f64::INFINITY, 0.03] {
+        let all = bvh.closest_all(&surface, &queries, max);
+        for (q, hit) in queries.iter().zip(&all).step_by(3) {
+            same(*hit, brute_force_closest(&surface, &nodes, q, max)).unwrap();
+        }
+    }
+}

@@ -4,7 +4,9 @@
 //! * [`aabb`], [`morton`]: boxes and Z-order codes;
 //! * [`bvh`]: the bounding-volume hierarchy (parallel build, refit, rebuild on degraded quality);
 //! * [`layout`]: its topology (Morton splits collapsed to four-wide nodes); `node`: its nodes;
-//! * [`query`]: closest facet and facets within a distance, parallel over nodes, deterministic;
+//! * [`query`]: closest facet and facets within a distance, parallel over nodes, deterministic,
+//!   optionally from a hint facet; `lanes`: four facets measured at once;
+//! * [`packet`]: coherent batches, a packet of consecutive queries sharing one traversal;
 //! * [`incremental`]: the neighbourhood walk from last increment's facet, with tree fallback.
 //!
 //! The search uses the kernel's closest-point query, so each answer says whether the node faces the
@@ -17,6 +19,7 @@ pub(crate) mod lanes;
 pub mod layout;
 pub mod morton;
 pub(crate) mod node;
+pub mod packet;
 pub mod query;
 pub mod scenes;
 pub mod surface;

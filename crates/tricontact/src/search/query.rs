@@ -13,10 +13,11 @@
 //!
 //! # Hints
 //! A query may start from a hint facet ([`Bvh::closest_with_hint`]): its exact squared distance is
-//! the first bound, so boxes farther than it are pruned from the root down. [`Bvh::closest_all`]
-//! hints each query with the previous query's answer within chunks of [`HINT_CHUNK`] queries.
-//! Since the bound is inclusive and ties are decided by the order below, a hint never changes the
-//! answer.
+//! the first bound, so boxes farther than it are pruned from the root down. Since the bound is
+//! inclusive and ties are decided by the order below, a hint never changes the answer.
+//! [`Bvh::closest_all`] cuts the queries into chunks of [`HINT_CHUNK`], answered in parallel; within
+//! a chunk, packets of consecutive queries share one traversal ([`crate::search::packet`]) and each
+//! query is hinted with the previous answer.
 //!
 //! # Ties and determinism
 //! A candidate is better when its squared distance is smaller, or equal with a smaller facet index.
@@ -43,11 +44,11 @@ thread_local! {
     static STACK: std::cell::RefCell<Vec<(u32, f64)>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
-/// Queries per sequential chunk of [`Bvh::closest_all`]: each is hinted with the previous answer.
+/// Queries per sequential chunk of [`Bvh::closest_all`] (packets and hints run within a chunk).
 pub const HINT_CHUNK: usize = 256;
 
 /// Relative margin on squared distances below which a box is never pruned.
-const TIE_MARGIN: f64 = 1.0 + 1e-12;
+pub(crate) const TIE_MARGIN: f64 = 1.0 + 1e-12;
 
 /// A facet found by a query, with the closest point on it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -239,7 +240,7 @@ impl Bvh {
     /// Offers the facets of the leaf `first..first + count` (evaluated together, see
     /// [`lanes`]) to `best`.
     #[inline]
-    fn offer_leaf(
+    pub(crate) fn offer_leaf(
         &self,
         surface: &Surface,
         q: &Query,
@@ -299,9 +300,10 @@ impl Bvh {
     /// [`Bvh::closest`] for many queries in parallel; the result is independent of the thread
     /// count.
     ///
-    /// The queries are cut into chunks of [`HINT_CHUNK`]; within a chunk each query is hinted with
-    /// the previous one's answer ([`Bvh::closest_with_hint`]), which speeds up a spatially coherent
-    /// batch (neighbouring nodes one after the other) and leaves every answer unchanged.
+    /// The queries are cut into chunks of [`HINT_CHUNK`]; within a chunk, packets of consecutive
+    /// queries share one traversal ([`crate::search::packet`]) and each query is hinted with the
+    /// previous answer ([`Bvh::closest_with_hint`]). This speeds up a spatially coherent batch
+    /// (neighbouring nodes one after the other) and leaves every answer unchanged.
     #[must_use]
     pub fn closest_all(
         &self,
@@ -310,15 +312,10 @@ impl Bvh {
         max_distance: f64,
     ) -> Vec<Option<Hit>> {
         let mut out = vec![None; queries.len()];
+        let max2 = max_distance * max_distance;
         out.par_chunks_mut(HINT_CHUNK)
             .zip(queries.par_chunks(HINT_CHUNK))
-            .for_each(|(hits, qs)| {
-                let mut hint = None;
-                for (hit, q) in hits.iter_mut().zip(qs) {
-                    *hit = self.closest_with_hint(surface, q, hint, max_distance);
-                    hint = hit.map(|h| h.facet).or(hint);
-                }
-            });
+            .for_each(|(hits, qs)| self.closest_chunk(surface, qs, hits, max2));
         out
     }
 }
