@@ -7,7 +7,8 @@
 //! * [`query`]: closest facet and facets within a distance, parallel over nodes, deterministic,
 //!   optionally from a hint facet; `lanes`: four facets measured at once;
 //! * [`packet`]: coherent batches, a packet of consecutive queries sharing one traversal;
-//! * [`incremental`]: the neighbourhood walk from last increment's facet, with tree fallback.
+//! * [`incremental`]: answers again after a small motion from per-query neighbourhood lists, with
+//!   a certificate from the largest motion, and tree fallback.
 //!
 //! The search uses the kernel's closest-point query, so each answer says whether the node faces the
 //! interior, an edge or a vertex of its facet.
@@ -26,6 +27,6 @@ pub mod surface;
 
 pub use aabb::Aabb;
 pub use bvh::{Bvh, LEAF_SIZE, REBUILD_RATIO, Update};
-pub use incremental::{IncrementalStats, MAX_STEPS};
+pub use incremental::{IncrementalStats, Neighbourhoods};
 pub use query::{HINT_CHUNK, Hit, Query, brute_force_closest, measure, sort_hits};
 pub use surface::{Surface, SurfaceError};

@@ -122,7 +122,7 @@ impl Node {
 
 /// The largest `f32` not above `x`.
 #[allow(clippy::cast_possible_truncation)]
-fn round_down(x: f64) -> f32 {
+pub(crate) fn round_down(x: f64) -> f32 {
     let y = x as f32;
     if f64::from(y) > x { y.next_down() } else { y }
 }
