@@ -14,7 +14,7 @@
 //! from a model). Two-thread figures are wall-clock.
 //!
 //! Incremental search: neighbourhood lists (skin half an element) are made at the initial
-//! positions; the torus is then deformed by a wave and a twist of 0.1 and 0.2 element sizes each
+//! positions; the torus is then deformed by a wave and a twist of 0.01, 0.1 and 0.2 element sizes each
 //! (the largest node motion is printed, in element sizes). The incremental search needs no tree;
 //! the full query needs the tree refitted to the new positions, so both ratios are printed: against
 //! the query alone and against refit plus query.
@@ -214,7 +214,7 @@ fn deformed(nodes: &[Vec3], h: f64, a: f64) -> Vec<Vec3> {
 }
 
 /// Neighbourhood lists made at the initial positions (skin half an element), then, after
-/// deformations of 0.1 and 0.2 element sizes: the incremental search against the full query alone
+/// deformations of 0.01, 0.1 and 0.2 element sizes: the incremental search against the full query alone
 /// and against the refit plus the full query (the tree must follow the nodes; the lists need not).
 fn incremental(
     surface: &Surface,
@@ -236,7 +236,7 @@ fn incremental(
         lists.len() as f64 / nq,
         lists.len() as f64 * 8e-6
     );
-    for a in [0.1, 0.2] {
+    for a in [0.01, 0.1, 0.2] {
         let moved = deformed(nodes, h, a);
         let tree = Mutex::new(bvh.clone());
         let (t_refit, kind) = time_one_core(1, || {

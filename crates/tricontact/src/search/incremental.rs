@@ -4,6 +4,8 @@
 //! A full search ([`Neighbourhoods::new`]) records, for each query, its point `p₀`, its closest
 //! distance `d₀`, and every facet within the reach `ρ = d₀ + skin` with its distance `d₀(f)` then
 //! (sorted by it; stored in `f32`, rounded down), together with the surface's node positions `x₀`.
+//! One traversal per query finds both: a box is pruned when it is farther than the best distance
+//! so far plus the skin (queries in parallel chunks, each hinted with the previous one's answer).
 //!
 //! # Certificate
 //! Later, with node positions `x` and query point `p`, let `δ = maxₙ |xₙ − x₀ₙ|` over the
@@ -33,7 +35,9 @@ use crate::closest::{closest_point_on_triangle, distance_squared_to_triangle};
 use crate::facet::Facet;
 use crate::linalg::Vec3;
 use crate::search::bvh::{Bvh, Update};
-use crate::search::node::round_down;
+use crate::search::lanes;
+use crate::search::node::{as_leaf, round_down};
+use crate::search::query::{HINT_CHUNK, TIE_MARGIN, farthest_first};
 use crate::search::query::{Hit, Query};
 use crate::search::surface::{Surface, SurfaceError};
 
@@ -94,17 +98,16 @@ impl Neighbourhoods {
         skin: f64,
     ) -> Result<Self, SurfaceError> {
         surface.check_positions(positions)?;
-        let closest = bvh.closest_all(surface, queries, f64::INFINITY);
-        let lists: Vec<(f64, Vec<Hit>)> = queries
-            .par_iter()
-            .zip(&closest)
-            .with_min_len(64)
-            .map(|(q, hit)| match hit {
-                Some(h) => {
-                    let reach = h.closest.distance + skin;
-                    (reach, bvh.within(surface, q, reach))
-                }
-                None => (f64::INFINITY, Vec::new()),
+        // Chunks in parallel, each query hinted with the previous one's closest facet.
+        let lists: Vec<(f64, Vec<(f64, u32)>)> = queries
+            .par_chunks(HINT_CHUNK)
+            .flat_map_iter(|chunk| {
+                let mut hint = None;
+                chunk.iter().map(move |q| {
+                    let (reach, list) = bvh.neighbourhood(surface, q, hint, skin);
+                    hint = list.first().map(|&(_, f)| f).or(hint);
+                    (reach, list)
+                })
             })
             .collect();
         let mut start = Vec::with_capacity(queries.len() + 1);
@@ -112,8 +115,8 @@ impl Neighbourhoods {
         let total: usize = lists.iter().map(|(_, l)| l.len()).sum();
         let (mut facets, mut distances) = (Vec::with_capacity(total), Vec::with_capacity(total));
         for (_, list) in &lists {
-            facets.extend(list.iter().map(|h| h.facet));
-            distances.extend(list.iter().map(|h| round_down(h.closest.distance)));
+            facets.extend(list.iter().map(|&(_, f)| f));
+            distances.extend(list.iter().map(|&(d2, _)| round_down(d2.sqrt())));
             start.push(facets.len());
         }
         Ok(Self {
@@ -264,6 +267,60 @@ impl Neighbourhoods {
             Err(best.map(|(_, f, _)| f))
         };
         (outcome, measured)
+    }
+}
+
+impl Bvh {
+    /// Every facet within `skin` of the closest distance `d` to `q`, as `(squared distance, facet)`
+    /// sorted by distance then index, and the reach `d + skin` (`+∞` without any facet). One
+    /// traversal: a box is pruned when it is farther than the best distance so far plus `skin`.
+    fn neighbourhood(
+        &self,
+        surface: &Surface,
+        q: &Query,
+        hint: Option<u32>,
+        skin: f64,
+    ) -> (f64, Vec<(f64, u32)>) {
+        let mut best = hint
+            .and_then(|f| self.candidate(surface, q, f))
+            .map_or(f64::INFINITY, |c| c.d2);
+        let bound = |best: f64| (best.sqrt() + skin).powi(2) * TIE_MARGIN;
+        let mut found = Vec::new();
+        let mut stack = vec![(self.root, 0.0)];
+        while let Some((child, d2_box)) = stack.pop() {
+            if d2_box > bound(best) {
+                continue;
+            }
+            if let Some((first, count)) = as_leaf(child) {
+                if count == 0 {
+                    continue;
+                }
+                let corners = &self.corners[first..first + count];
+                let d2 = lanes::distances_squared(corners, &q.point);
+                for (k, &d2) in d2.iter().enumerate().take(count) {
+                    let facet = self.order[first + k];
+                    if !q.excludes(surface, facet) && d2 <= bound(best) {
+                        best = best.min(d2);
+                        found.push((d2, facet));
+                    }
+                }
+                continue;
+            }
+            let node = &self.nodes[child as usize];
+            let limit = bound(best);
+            for (d, c) in farthest_first(node.child_distances_squared(&q.point), node.child) {
+                if d <= limit && d < f64::INFINITY {
+                    stack.push((c, d));
+                }
+            }
+        }
+        if best == f64::INFINITY {
+            return (f64::INFINITY, Vec::new());
+        }
+        let reach = best.sqrt() + skin;
+        found.retain(|&(d2, _)| d2 <= reach * reach);
+        found.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        (reach, found)
     }
 }
 

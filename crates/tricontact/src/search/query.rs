@@ -323,7 +323,7 @@ impl Bvh {
 /// The four `(distance, child)` pairs sorted by decreasing distance (a five-exchange sorting
 /// network, branch-free).
 #[inline]
-fn farthest_first(d: [f64; 4], child: [Child; 4]) -> [(f64, Child); 4] {
+pub(crate) fn farthest_first(d: [f64; 4], child: [Child; 4]) -> [(f64, Child); 4] {
     let mut v = [
         (d[0], child[0]),
         (d[1], child[1]),
