@@ -14,8 +14,8 @@
 //! from a model). Two-thread figures are wall-clock.
 //!
 //! Incremental search: neighbourhood lists (skin half an element) are made at the initial
-//! positions; the torus is then deformed by a wave and a twist of 0.01, 0.1 and 0.2 element sizes each
-//! (the largest node motion is printed, in element sizes). The incremental search needs no tree;
+//! positions; the torus is then deformed by a wave and a twist of 0.01, 0.1 and 0.2 element sizes
+//! each (the largest node motion is printed, in element sizes). The incremental search needs no tree;
 //! the full query needs the tree refitted to the new positions, so both ratios are printed: against
 //! the query alone and against refit plus query.
 
@@ -214,8 +214,9 @@ fn deformed(nodes: &[Vec3], h: f64, a: f64) -> Vec<Vec3> {
 }
 
 /// Neighbourhood lists made at the initial positions (skin half an element), then, after
-/// deformations of 0.01, 0.1 and 0.2 element sizes: the incremental search against the full query alone
-/// and against the refit plus the full query (the tree must follow the nodes; the lists need not).
+/// deformations of 0.01, 0.1 and 0.2 element sizes: the incremental search against the full query
+/// alone and against the refit plus the full query (the tree must follow the nodes; the lists need
+/// not).
 fn incremental(
     surface: &Surface,
     nodes: &[Vec3],

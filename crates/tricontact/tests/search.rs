@@ -429,9 +429,9 @@ fn packets_match_brute_force_on_a_sorted_soup() {
 }
 
 /// Two parallel plates without a shared node: queries that move from just above the lower plate to
-/// just below the upper one. A walk over facet neighbours from the lower plate would stay there; the
-/// lists' certificate fails (the queries moved farther than the reach), the queries fall back to the
-/// tree, which is updated once, and the answers are those of brute force.
+/// just below the upper one. A walk over facet neighbours from the lower plate would stay there;
+/// the lists' certificate fails (the queries moved farther than the reach), the queries fall back
+/// to the tree, which is updated once, and the answers are those of brute force.
 #[test]
 fn incremental_search_falls_back_when_queries_move_far() {
     let (mut nodes, mut facets) = grid(6, 0.5);

@@ -10,17 +10,18 @@
 //! # Certificate
 //! Later, with node positions `x` and query point `p`, let `δ = maxₙ |xₙ − x₀ₙ|` over the
 //! surface's nodes and `m = |p − p₀| + δ`. Every point of a facet is a convex combination of its
-//! nodes, so it moved by at most `δ`, and the distance from the query to any facet changed by at most
-//! `m`: `d(f) ≥ d₀(f) − m`. The query measures its listed facets in increasing `d₀(f)` until
+//! nodes, so it moved by at most `δ`, and the distance from the query to any facet changed by at
+//! most `m`: `d(f) ≥ d₀(f) − m`. The query measures its listed facets in increasing `d₀(f)` until
 //! `d₀(f) − m` exceeds the best distance `b` found: the facets left are farther than `b`. A facet
 //! that is not listed was farther than `ρ`, so it is now farther than `ρ − m`; when `b < ρ − m` the
-//! best measured facet is the closest of all. Candidates are measured with the kernel the tree uses
-//! ([`distance_squared_to_triangle`]) and compared in the same total order (distance, then facet
-//! index), so the answer is the tree's, exactly. A margin of 10⁻⁹ of the coordinates' magnitude
-//! absorbs rounding in these bounds.
+//! best measured facet is the closest of all. Candidates are measured with the kernel the tree
+//! uses ([`distance_squared_to_triangle`]) and compared in the same total order (distance, then
+//! facet index), so the answer is the tree's, exactly. A margin of 10⁻⁹ of the coordinates'
+//! magnitude absorbs rounding in these bounds.
 //!
-//! A query whose answer is not certified falls back to the tree, which [`Neighbourhoods::closest_all`]
-//! refits first, once, only if some query needs it: the certified queries never touch the tree.
+//! A query whose answer is not certified falls back to the tree, which
+//! [`Neighbourhoods::closest_all`] updates first, once, only if some query needs it: the certified
+//! queries never touch the tree.
 //! [`IncrementalStats`] counts fallbacks and measured facets. When the nodes have moved by about
 //! half the skin, lists fail and should be made again.
 //!

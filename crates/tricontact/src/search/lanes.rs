@@ -1,14 +1,14 @@
 //! Squared distances from one point to the (up to) four facets of a leaf, computed lane by lane.
 //!
 //! The arithmetic is exactly that of [`distance_squared_to_triangle`], operation for operation:
-//! the six dot products `d1 … d6` of the edges `ab`, `ac` with `p − a`, `p − b`, `p − c`, the three
-//! scaled sub-areas `va, vb, vc`, the edge parameters and the face's barycentric coordinates, and
-//! finally `|p − (a N_a + b N_b + c N_c)|²`. The scalar kernel picks the first Voronoi region whose
-//! test holds (vertices, then edges, then the face); here every lane computes every candidate and
-//! selects by the same priority, without branches, so the four facets are evaluated together and
-//! the results are bit for bit those of the scalar kernel: the tree compares exactly the numbers the
-//! brute-force search compares. A lane whose selected coordinates are not finite (extreme
-//! coordinates, where the scalar kernel rescales) is recomputed with the scalar kernel.
+//! the six dot products `d1 … d6` of the edges `ab`, `ac` with `p − a`, `p − b`, `p − c`, the
+//! three scaled sub-areas `va, vb, vc`, the edge parameters and the face's barycentric coordinates,
+//! and finally `|p − (a N_a + b N_b + c N_c)|²`. The scalar kernel picks the first Voronoi region
+//! whose test holds (vertices, then edges, then the face); here every lane computes every
+//! candidate and selects by the same priority, without branches, so the four facets are evaluated
+//! together and the results are bit for bit those of the scalar kernel: the tree compares exactly
+//! the numbers the brute-force search compares. A lane whose selected coordinates are not finite
+//! (extreme coordinates, where the scalar kernel rescales) is recomputed with the scalar kernel.
 
 use crate::closest::distance_squared_to_triangle;
 use crate::linalg::Vec3;

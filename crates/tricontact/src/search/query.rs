@@ -15,9 +15,9 @@
 //! A query may start from a hint facet ([`Bvh::closest_with_hint`]): its exact squared distance is
 //! the first bound, so boxes farther than it are pruned from the root down. Since the bound is
 //! inclusive and ties are decided by the order below, a hint never changes the answer.
-//! [`Bvh::closest_all`] cuts the queries into chunks of [`HINT_CHUNK`], answered in parallel; within
-//! a chunk, packets of consecutive queries share one traversal ([`crate::search::packet`]) and each
-//! query is hinted with the previous answer.
+//! [`Bvh::closest_all`] cuts the queries into chunks of [`HINT_CHUNK`], answered in parallel;
+//! within a chunk, packets of consecutive queries share one traversal ([`crate::search::packet`])
+//! and each query is hinted with the previous answer.
 //!
 //! # Ties and determinism
 //! A candidate is better when its squared distance is smaller, or equal with a smaller facet index.
