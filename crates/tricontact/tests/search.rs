@@ -538,3 +538,27 @@ fn incremental_search_keeps_ties_exclusions_and_degenerate_facets_exact() {
         Err(SurfaceError::QueryCount { .. })
     ));
 }
+
+/// A query at NaN or infinity inside a coherent batch must not break the packet's certificate for
+/// its neighbours: every other answer still equals brute force.
+#[test]
+fn packets_survive_non_finite_queries() {
+    let (nodes, facets) = grid(16, 0.5);
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    let mut queries: Vec<Query> = (0..400)
+        .map(|k| Query::point(Vec3::new(0.02 * f64::from(k), 1.3, 0.1)))
+        .collect();
+    queries[40].point.x = f64::NAN;
+    queries[77].point.y = f64::INFINITY;
+    let all = bvh.closest_all(&surface, &queries, f64::INFINITY);
+    for (k, (q, hit)) in queries.iter().zip(&all).enumerate() {
+        if k != 40 && k != 77 {
+            same(
+                *hit,
+                brute_force_closest(&surface, &nodes, q, f64::INFINITY),
+            )
+            .unwrap();
+        }
+    }
+}

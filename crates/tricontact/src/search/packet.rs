@@ -173,8 +173,11 @@ impl Bvh {
         let b = queries
             .iter()
             .fold(Aabb::EMPTY, |b, q| b.union_point(&q.point));
-        // Queries spread over more than a few radii (random order) would gather too much.
-        if (b.max - b.min).norm_squared() > SPREAD * SPREAD * radius2 {
+        // Queries spread over more than a few radii (random order) would gather too much. A box
+        // that is not finite (a query at NaN or infinity) gathers nothing reliably: the certificate
+        // needs every leaf left out to be far, not merely incomparable.
+        let spread2 = (b.max - b.min).norm_squared();
+        if !spread2.is_finite() || spread2 > SPREAD * SPREAD * radius2 {
             return false;
         }
         let bound = radius2 * TIE_MARGIN;
