@@ -2,7 +2,7 @@
 //!
 //! Measures, in one run and on the same scenes, the BVH build, closest-facet queries in coherent
 //! and random order, the speed-up over brute force and over `parry3d-f64`'s BVH point projection,
-//! and the incremental walk's speed-up over the full query after a small deformation.
+//! and the incremental search's speed-up over the full query after small deformations.
 //!
 //! Run with `cargo run --release -p tricontact --example search_bench` (add `-- --quick` to skip
 //! the 10⁶-facet scene). Scenes: triangulated tori (major radius 3, minor radius 1) with about
@@ -10,8 +10,16 @@
 //! to ±2 element sizes along its normal. "Coherent" queries come in facet order (neighbours in
 //! space are neighbours in the list); "random" queries are shuffled. Per-core figures are the CPU
 //! time of a one-thread pool (so they hold on a shared machine); brute force is timed on a subset
-//! of queries and its ratio is per query. Two-thread figures are wall-clock.
+//! of queries and its ratio is per query (measured per query on the subset, not extrapolated
+//! from a model). Two-thread figures are wall-clock.
+//!
+//! Incremental search: neighbourhood lists (skin half an element) are made at the initial
+//! positions; the torus is then deformed by a wave and a twist of 0.01, 0.1 and 0.2 element sizes
+//! each (the largest node motion is printed, in element sizes). The incremental search needs no tree;
+//! the full query needs the tree refitted to the new positions, so both ratios are printed: against
+//! the query alone and against refit plus query.
 
+use std::sync::Mutex;
 use std::time::Instant;
 
 use parry3d_f64::math::Vector as PVec;
@@ -19,7 +27,7 @@ use parry3d_f64::query::PointQuery;
 use parry3d_f64::shape::TriMesh;
 use tricontact::Vec3;
 use tricontact::search::scenes::{self, torus};
-use tricontact::search::{Bvh, Hit, Query, Surface, Update, brute_force_closest};
+use tricontact::search::{Bvh, Hit, Neighbourhoods, Query, Surface, Update, brute_force_closest};
 
 fn near_surface(nodes: &[Vec3], facets: &[[u32; 3]], h: f64) -> Vec<Query> {
     scenes::near_surface(nodes, facets, 2.0 * h, 11)
@@ -103,7 +111,7 @@ fn scene(nu: u32, nv: u32) {
     let (t_surface, surface) = time(1, || {
         Surface::new(facets.clone(), nodes.len()).expect("surface")
     });
-    let (t_build, mut bvh) = time(3, || Bvh::build(&surface, &nodes, 0.0).expect("bvh"));
+    let (t_build, bvh) = time(3, || Bvh::build(&surface, &nodes, 0.0).expect("bvh"));
     let (t_build1, _) =
         pool(1).install(|| time(3, || Bvh::build(&surface, &nodes, 0.0).expect("bvh")));
     println!("surface adjacency       {:>9.2} ms", t_surface * 1e3);
@@ -185,40 +193,94 @@ fn scene(nu: u32, nv: u32) {
         t_parry / t_coh
     );
 
-    // Incremental: a small deformation, refit, then walk from last facets vs full queries.
-    let moved: Vec<Vec3> = nodes
+    incremental(&surface, &nodes, &queries, bvh, h, &hits);
+}
+
+/// The torus moved by about `a` element sizes: a wave of amplitude `a h` along the axis and a twist
+/// about it whose largest displacement is `a h` (the torus reaches 4 from the axis, 1 along it).
+fn deformed(nodes: &[Vec3], h: f64, a: f64) -> Vec<Vec3> {
+    nodes
         .iter()
         .map(|p| {
-            let wave = 0.2 * h * (2.0 * p.x).sin();
-            let twist = 0.002 * p.z;
+            let wave = a * h * (2.0 * p.x).sin();
+            let twist = 0.25 * a * h * p.z;
             Vec3::new(
                 p.x * twist.cos() - p.y * twist.sin(),
                 p.x * twist.sin() + p.y * twist.cos(),
                 p.z + wave,
             )
         })
-        .collect();
-    let (t_refit, kind) = time(1, || bvh.update(&surface, &moved).expect("update"));
-    assert_eq!(kind, Update::Refit);
-    let previous: Vec<Option<u32>> = hits.iter().map(|h| h.map(|h| h.facet)).collect();
-    let (t_full, full) = time_one_core(3, || bvh.closest_all(&surface, &queries, inf));
-    let (t_walk, (walked, stats)) = time_one_core(3, || {
-        bvh.closest_all_from(&surface, &queries, &previous, inf)
+        .collect()
+}
+
+/// Neighbourhood lists made at the initial positions (skin half an element), then, after
+/// deformations of 0.01, 0.1 and 0.2 element sizes: the incremental search against the full query
+/// alone and against the refit plus the full query (the tree must follow the nodes; the lists need
+/// not).
+fn incremental(
+    surface: &Surface,
+    nodes: &[Vec3],
+    queries: &[Query],
+    bvh: Bvh,
+    h: f64,
+    hits: &[Option<Hit>],
+) {
+    let inf = f64::INFINITY;
+    let nq = queries.len() as f64;
+    let skin = 0.5 * h;
+    let (t_lists, lists) = time_one_core(1, || {
+        Neighbourhoods::new(&bvh, surface, nodes, queries, skin).expect("lists")
     });
-    let mismatches = walked
-        .iter()
-        .zip(&full)
-        .filter(|(a, b)| a.map(|h| h.facet) != b.map(|h| h.facet))
-        .count();
     println!(
-        "refit after deformation {:>9.2} ms; incremental {:.2} ms vs full {:.2} ms per core: {:.1}× faster, {} fallbacks ({:.3} %), {mismatches} answers differ",
-        t_refit * 1e3,
-        t_walk * 1e3,
-        t_full * 1e3,
-        t_full / t_walk,
-        stats.fallbacks,
-        100.0 * stats.fallbacks as f64 / nq
+        "neighbourhood lists     {:>9.2} ms per core (skin 0.5 h): {:.1} facets per query, {:.0} MB",
+        t_lists * 1e3,
+        lists.len() as f64 / nq,
+        lists.len() as f64 * 8e-6
     );
+    for a in [0.01, 0.1, 0.2] {
+        let moved = deformed(nodes, h, a);
+        let tree = Mutex::new(bvh.clone());
+        let (t_refit, kind) = time_one_core(1, || {
+            tree.lock()
+                .expect("tree")
+                .update(surface, &moved)
+                .expect("update")
+        });
+        assert_eq!(kind, Update::Refit);
+        let refitted = tree.lock().expect("tree").clone();
+        let (t_full, full) = time_one_core(3, || refitted.closest_all(surface, queries, inf));
+        // A fallback updates the tree (each call: the update refits it again).
+        let stale = Mutex::new(bvh.clone());
+        let (t_inc, (answers, stats)) = time_one_core(3, || {
+            lists
+                .closest_all(
+                    &mut stale.lock().expect("tree"),
+                    surface,
+                    &moved,
+                    queries,
+                    inf,
+                )
+                .expect("incremental")
+        });
+        let mismatches = answers.iter().zip(&full).filter(|(a, b)| a != b).count();
+        let changed = hits
+            .iter()
+            .zip(&full)
+            .filter(|(a, b)| a.map(|h| h.facet) != b.map(|h| h.facet))
+            .count();
+        println!(
+            "after motion {:.2} h      refit {:.2} ms, full query {:.2} ms, incremental {:.2} ms per core: {:.1}× the query alone, {:.1}× refit + query; {:.2} facets measured per query, {} fallbacks ({:.3} %), {changed} answers changed, {mismatches} differ from the full query",
+            lists.motion(&moved) / h,
+            t_refit * 1e3,
+            t_full * 1e3,
+            t_inc * 1e3,
+            t_full / t_inc,
+            (t_refit + t_full) / t_inc,
+            stats.measured as f64 / nq,
+            stats.fallbacks,
+            100.0 * stats.fallbacks as f64 / nq
+        );
+    }
 }
 
 fn main() {

@@ -11,7 +11,7 @@
 //!   point–vertex distances with derivatives;
 //! * [`contact`]: the facet-choice rule at edges and vertices, assembled penalty terms;
 //! * [`search`]: which facet each slave node meets, in meshes of millions of facets (BVH,
-//!   incremental walk, parallel queries).
+//!   incremental search from neighbourhood lists, parallel queries).
 //!
 //! Coordinates of a node–facet pair are stacked `[x_i, x_j, x_k, x_l]` (12 entries). No function
 //! panics or returns NaN for finite input: degenerate geometry is a [`GeometryError`].

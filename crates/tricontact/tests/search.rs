@@ -1,10 +1,11 @@
 //! The contact search against brute force: random and structured scenes, ties on shared edges and
-//! vertices, degenerate facets, self-contact exclusion, refit/rebuild, incremental walk, threads.
+//! vertices, degenerate facets, self-contact exclusion, refit/rebuild, hints, packets, incremental
+//! search from neighbourhood lists, threads.
 
 use proptest::prelude::*;
 use tricontact::search::scenes::{self, grid, torus};
 use tricontact::search::{
-    Bvh, Hit, Query, Surface, SurfaceError, Update, brute_force_closest, measure,
+    Bvh, Hit, Neighbourhoods, Query, Surface, SurfaceError, Update, brute_force_closest, measure,
 };
 use tricontact::{Vec3, distance_squared_to_triangle};
 
@@ -159,8 +160,11 @@ fn near_surface(nodes: &[Vec3], surface: &Surface, seed: u64, h: f64) -> Vec<Que
         .collect()
 }
 
+/// A small deformation of the torus (motion about a quarter of an element): every query is
+/// certified by its neighbourhood list, no tree update is needed, and all answers equal brute force
+/// at the new positions.
 #[test]
-fn torus_queries_refit_and_incremental_walk_match_brute_force() {
+fn torus_queries_refit_and_incremental_search_match_brute_force() {
     let (nodes, facets) = torus(60, 30, 2.0, 0.6);
     let h = std::f64::consts::TAU * 0.6 / 30.0;
     let surface = Surface::new(facets, nodes.len()).unwrap();
@@ -174,6 +178,7 @@ fn torus_queries_refit_and_incremental_walk_match_brute_force() {
         )
         .unwrap();
     }
+    let lists = Neighbourhoods::new(&bvh, &surface, &nodes, &queries, 0.6 * h).unwrap();
     // A small deformation: a wave of amplitude 0.2 h along the normal and a small twist.
     let moved: Vec<Vec3> = nodes
         .iter()
@@ -187,18 +192,25 @@ fn torus_queries_refit_and_incremental_walk_match_brute_force() {
             )
         })
         .collect();
-    assert_eq!(bvh.update(&surface, &moved).unwrap(), Update::Refit);
-    let previous: Vec<Option<u32>> = first.iter().map(|h| h.map(|h| h.facet)).collect();
-    let (walked, stats) = bvh.closest_all_from(&surface, &queries, &previous, f64::INFINITY);
-    let full = bvh.closest_all(&surface, &queries, f64::INFINITY);
-    for (w, f) in walked.iter().zip(&full) {
-        same(*w, *f).unwrap();
-    }
-    for (q, f) in queries.iter().zip(&full).step_by(11) {
-        same(*f, brute_force_closest(&surface, &moved, q, f64::INFINITY)).unwrap();
+    assert!(lists.motion(&moved) < 0.25 * h);
+    let (incremental, stats) = lists
+        .closest_all(&mut bvh, &surface, &moved, &queries, f64::INFINITY)
+        .unwrap();
+    for (q, hit) in queries.iter().zip(&incremental) {
+        same(
+            *hit,
+            brute_force_closest(&surface, &moved, q, f64::INFINITY),
+        )
+        .unwrap();
     }
     assert_eq!(stats.queries, queries.len());
     assert!(stats.fallbacks * 100 < stats.queries, "{stats:?}");
+    assert!(stats.measured < 10 * stats.queries, "{stats:?}");
+    assert_eq!(bvh.update(&surface, &moved).unwrap(), Update::Refit);
+    assert_eq!(
+        bvh.closest_all(&surface, &queries, f64::INFINITY),
+        incremental
+    );
     // A large motion (the torus swollen by half) degrades the refit: the tree is rebuilt.
     let swollen: Vec<Vec3> = nodes
         .iter()
@@ -270,4 +282,283 @@ fn bad_surfaces_are_errors() {
         bvh.closest(&empty, &Query::point(Vec3::zeros()), f64::INFINITY)
             .is_none()
     );
+}
+
+/// Every hint — the answer, a neighbour, a facet far away, a degenerate facet, an excluded facet,
+/// an index out of range — gives the unhinted (brute-force) answer, ties included.
+#[test]
+fn hints_never_change_the_answer() {
+    let (mut nodes, mut facets) = grid(6, 0.5);
+    // A degenerate facet (three collinear nodes) above the grid.
+    let base = u32::try_from(nodes.len()).unwrap();
+    nodes.extend([
+        Vec3::new(0.5, 0.5, 0.2),
+        Vec3::new(1.0, 1.0, 0.2),
+        Vec3::new(1.5, 1.5, 0.2),
+    ]);
+    facets.push([base, base + 1, base + 2]);
+    let degenerate = u32::try_from(facets.len() - 1).unwrap();
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    let far = 0;
+    let mut checked = 0;
+    for j in 0..=12 {
+        for i in 0..=12 {
+            for z in [0.0, 0.4, -0.1] {
+                let point = Vec3::new(f64::from(i) * 0.25, f64::from(j) * 0.25, z);
+                let node = u32::try_from(j / 2 * 7 + i / 2).unwrap();
+                for q in [
+                    Query::point(point),
+                    Query {
+                        point,
+                        exclude: Some(node),
+                    },
+                ] {
+                    for max in [f64::INFINITY, 0.2] {
+                        let reference = brute_force_closest(&surface, &nodes, &q, max);
+                        let answer = reference.map(|h| h.facet);
+                        let hints = [
+                            answer,
+                            answer.map(|f| f ^ 1),
+                            Some(far),
+                            Some(degenerate),
+                            Some(
+                                surface
+                                    .facets()
+                                    .iter()
+                                    .position(|f| f.contains(&node))
+                                    .unwrap() as u32,
+                            ),
+                            Some(u32::MAX),
+                            None,
+                        ];
+                        for hint in hints {
+                            same(bvh.closest_with_hint(&surface, &q, hint, max), reference)
+                                .unwrap();
+                            checked += 1;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert_eq!(checked, 13 * 13 * 3 * 2 * 2 * 7);
+}
+
+/// Chunked hinting in `closest_all` leaves every answer as the unhinted query gives it, in
+/// coherent and in shuffled order, with and without a distance limit.
+#[test]
+fn closest_all_with_hints_matches_single_queries() {
+    let (nodes, facets) = soup(3000, 9);
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    let mut r = scenes::uniform(4);
+    let queries: Vec<Query> = (0..2000)
+        .map(|_| Query::point(Vec3::new(r(), r(), r())))
+        .collect();
+    for max in [f64::INFINITY, 0.02] {
+        let all = bvh.closest_all(&surface, &queries, max);
+        for (q, hit) in queries.iter().zip(&all) {
+            same(*hit, bvh.closest(&surface, q, max)).unwrap();
+        }
+        for (q, hit) in queries.iter().zip(&all).step_by(10) {
+            same(*hit, brute_force_closest(&surface, &nodes, q, max)).unwrap();
+        }
+    }
+}
+
+/// Coherent batches go through packets (one gathering for 16 consecutive queries): on a tie grid,
+/// queries in row order on vertices, edges and faces at mixed heights, with a far query now and
+/// then (its answer lies beyond the gathering radius: a fallback, then a large radius), with and
+/// without self-exclusion and a search distance, all equal brute force.
+#[test]
+fn packets_match_brute_force_on_ties_and_fallbacks() {
+    let (nodes, facets) = grid(16, 0.5);
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    let heights = [0.0, 0.3, -0.2, 0.05];
+    let mut points = Vec::new();
+    for j in 0..=32 {
+        for i in 0..=64 {
+            let k = points.len();
+            let z = if k % 37 == 36 { 3.0 } else { heights[k % 4] };
+            points.push(Vec3::new(f64::from(i) * 0.125, f64::from(j) * 0.25, z));
+        }
+    }
+    let node_at = |p: &Vec3| {
+        let (i, j) = ((p.x / 0.5).round(), (p.y / 0.5).round());
+        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+        let n = (j as u32) * 17 + i as u32;
+        n
+    };
+    for exclude in [false, true] {
+        let queries: Vec<Query> = points
+            .iter()
+            .map(|p| Query {
+                point: *p,
+                exclude: exclude.then(|| node_at(p)),
+            })
+            .collect();
+        for max in [f64::INFINITY, 0.25] {
+            let all = bvh.closest_all(&surface, &queries, max);
+            for (q, hit) in queries.iter().zip(&all) {
+                same(*hit, brute_force_closest(&surface, &nodes, q, max)).unwrap();
+            }
+        }
+    }
+}
+
+/// Packets on a random soup, with queries sorted by cells so that consecutive ones are close.
+#[test]
+fn packets_match_brute_force_on_a_sorted_soup() {
+    let (nodes, facets) = soup(4000, 21);
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    let mut r = scenes::uniform(8);
+    let mut points: Vec<Vec3> = (0..3000).map(|_| Vec3::new(r(), r(), 0.2 * r())).collect();
+    // By cells of 0.1 × 0.1: 16 consecutive points lie in one or two cells.
+    let cell = |p: &Vec3| ((10.0 * p.y).floor(), (10.0 * p.x).floor());
+    points.sort_by(|a, b| cell(a).partial_cmp(&cell(b)).unwrap());
+    let queries: Vec<Query> = points.into_iter().map(Query::point).collect();
+    for max in [f64::INFINITY, 0.03] {
+        let all = bvh.closest_all(&surface, &queries, max);
+        for (q, hit) in queries.iter().zip(&all).step_by(3) {
+            same(*hit, brute_force_closest(&surface, &nodes, q, max)).unwrap();
+        }
+    }
+}
+
+/// Two parallel plates without a shared node: queries that move from just above the lower plate to
+/// just below the upper one. A walk over facet neighbours from the lower plate would stay there;
+/// the lists' certificate fails (the queries moved farther than the reach), the queries fall back
+/// to the tree, which is updated once, and the answers are those of brute force.
+#[test]
+fn incremental_search_falls_back_when_queries_move_far() {
+    let (mut nodes, mut facets) = grid(6, 0.5);
+    let n = u32::try_from(nodes.len()).unwrap();
+    let (upper, upper_facets) = grid(6, 0.5);
+    nodes.extend(upper.iter().map(|p| p + Vec3::new(0.0, 0.0, 1.0)));
+    facets.extend(upper_facets.iter().map(|f| f.map(|v| v + n)));
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let mut bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    let mut r = scenes::uniform(3);
+    let mut queries: Vec<Query> = (0..200)
+        .map(|_| Query::point(Vec3::new(3.0 * r(), 3.0 * r(), 0.1 + 0.05 * r())))
+        .collect();
+    let lists = Neighbourhoods::new(&bvh, &surface, &nodes, &queries, 0.2).unwrap();
+    for (k, q) in queries.iter_mut().enumerate() {
+        if k % 2 == 0 {
+            q.point.z += 0.75;
+        }
+    }
+    let (hits, stats) = lists
+        .closest_all(&mut bvh, &surface, &nodes, &queries, f64::INFINITY)
+        .unwrap();
+    for (q, hit) in queries.iter().zip(&hits) {
+        same(
+            *hit,
+            brute_force_closest(&surface, &nodes, q, f64::INFINITY),
+        )
+        .unwrap();
+        assert_eq!(hit.unwrap().facet >= 72, q.point.z > 0.5);
+    }
+    assert_eq!(stats.fallbacks, 100);
+    assert_eq!(stats.update, Some(Update::Refit));
+    // Back where the lists were made: every query is certified, the tree is not touched.
+    for (k, q) in queries.iter_mut().enumerate() {
+        if k % 2 == 0 {
+            q.point.z -= 0.75;
+        }
+    }
+    let (hits, stats) = lists
+        .closest_all(&mut bvh, &surface, &nodes, &queries, f64::INFINITY)
+        .unwrap();
+    assert_eq!((stats.fallbacks, stats.update), (0, None));
+    assert!(hits.iter().all(|h| h.unwrap().facet < 72));
+}
+
+/// Ties on vertices and edges of a grid lifted by an exactly representable offset (so ties stay
+/// exact), self-exclusion, a search distance that certifies `None`, and facets turning degenerate
+/// or valid between the lists and the query: all equal brute force.
+#[test]
+fn incremental_search_keeps_ties_exclusions_and_degenerate_facets_exact() {
+    let (mut nodes, mut facets) = grid(8, 0.5);
+    // Facet 128: collinear now, valid after the motion; facet 129: valid now, degenerate after.
+    let base = u32::try_from(nodes.len()).unwrap();
+    nodes.extend([
+        Vec3::new(1.0, 1.0, 0.15),
+        Vec3::new(1.5, 1.5, 0.15),
+        Vec3::new(2.0, 2.0, 0.15),
+        Vec3::new(3.0, 1.0, 0.15),
+        Vec3::new(3.5, 1.0, 0.15),
+        Vec3::new(3.25, 1.0 + 1.0 / 128.0, 0.15),
+    ]);
+    facets.extend([[base, base + 1, base + 2], [base + 3, base + 4, base + 5]]);
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let mut bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    assert_eq!(bvh.degenerate_facets(), vec![128]);
+    let check = |x: &[Vec3]| Bvh::build(&surface, x, 0.0).unwrap().degenerate_facets();
+    let mut queries = Vec::new();
+    for j in 0..=16 {
+        for i in 0..=16 {
+            let point = Vec3::new(f64::from(i) * 0.25, f64::from(j) * 0.25, 0.0);
+            let node = u32::try_from(j / 2 * 9 + i / 2).unwrap();
+            queries.push(Query::point(point + Vec3::new(0.0, 0.0, 0.1)));
+            queries.push(Query {
+                point,
+                exclude: Some(node),
+            });
+        }
+    }
+    let lists = Neighbourhoods::new(&bvh, &surface, &nodes, &queries, 0.3).unwrap();
+    let before = bvh.closest_all(&surface, &queries, f64::INFINITY);
+    assert!(before.iter().flatten().any(|h| h.facet == 129));
+    let lift = 1.0 / 1024.0;
+    let mut moved: Vec<Vec3> = nodes
+        .iter()
+        .map(|p| p + Vec3::new(0.0, 0.0, lift))
+        .collect();
+    let b = base as usize;
+    moved[b + 1].x += 1.0 / 64.0;
+    moved[b + 5].y = moved[b + 3].y;
+    assert_eq!(check(&moved), vec![129]);
+    for max in [f64::INFINITY, 0.05] {
+        let (hits, stats) = lists
+            .closest_all(&mut bvh, &surface, &moved, &queries, max)
+            .unwrap();
+        for (q, hit) in queries.iter().zip(&hits) {
+            same(*hit, brute_force_closest(&surface, &moved, q, max)).unwrap();
+        }
+        assert_eq!(hits.iter().flatten().any(|h| h.facet == 128), max > 1.0);
+        assert!(hits.iter().flatten().all(|h| h.facet != 129));
+        assert!(stats.fallbacks * 10 < stats.queries, "{stats:?}");
+    }
+    assert!(matches!(
+        lists.closest_all(&mut bvh, &surface, &moved, &queries[1..], 1.0),
+        Err(SurfaceError::QueryCount { .. })
+    ));
+}
+
+/// A query at NaN or infinity inside a coherent batch must not break the packet's certificate for
+/// its neighbours: every other answer still equals brute force.
+#[test]
+fn packets_survive_non_finite_queries() {
+    let (nodes, facets) = grid(16, 0.5);
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    let mut queries: Vec<Query> = (0..400)
+        .map(|k| Query::point(Vec3::new(0.02 * f64::from(k), 1.3, 0.1)))
+        .collect();
+    queries[40].point.x = f64::NAN;
+    queries[77].point.y = f64::INFINITY;
+    let all = bvh.closest_all(&surface, &queries, f64::INFINITY);
+    for (k, (q, hit)) in queries.iter().zip(&all).enumerate() {
+        if k != 40 && k != 77 {
+            same(
+                *hit,
+                brute_force_closest(&surface, &nodes, q, f64::INFINITY),
+            )
+            .unwrap();
+        }
+    }
 }

@@ -25,7 +25,7 @@ use crate::linalg::Vec3;
 use crate::search::aabb::Aabb;
 pub use crate::search::layout::LEAF_SIZE;
 pub(crate) use crate::search::layout::index;
-use crate::search::layout::layout;
+use crate::search::layout::{depth, layout};
 use crate::search::morton::morton_code;
 use crate::search::node::{Child, Node, WIDTH, as_leaf};
 use crate::search::surface::{Surface, SurfaceError};
@@ -58,6 +58,8 @@ pub struct Bvh {
     /// Slot of each facet in `order`, [`NO_SLOT`] for a degenerate facet.
     pub(crate) slot: Vec<u32>,
     pub(crate) degenerate: Vec<bool>,
+    /// Entries a query's traversal stack may need: three siblings left per level, plus one.
+    pub(crate) stack_size: usize,
     inflation: f64,
     built_area: f64,
 }
@@ -101,6 +103,7 @@ impl Bvh {
             .collect();
         keys.par_sort_unstable();
         let (root, nodes) = layout(&keys);
+        let stack_size = 3 * depth(&nodes, root) + 1;
         let order: Vec<u32> = keys.into_par_iter().map(|(_, f)| f).collect();
         let mut slot = vec![NO_SLOT; surface.len()];
         for (s, &f) in order.iter().enumerate() {
@@ -118,6 +121,7 @@ impl Bvh {
             corners,
             slot,
             degenerate,
+            stack_size,
             inflation,
             built_area: 0.0,
         };

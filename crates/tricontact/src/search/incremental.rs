@@ -1,119 +1,348 @@
-//! Incremental search: start from the facet a node had last time and walk the surface.
+//! Incremental search: the closest facets again after the nodes moved a little, without the tree.
 //!
-//! Within an increment nodes move little, so the facet closest to a node is usually the one it had
-//! or a neighbour of it. The walk measures the current facet and every facet sharing a node with it
-//! (the adjacency of [`Surface`]) and moves to the best of them — best in the same total order as
-//! the tree query: nearer, then lower index — until none is better. It stops at a facet that is
-//! best among its neighbours, which on a surface whose other parts are farther than the walk's
-//! answer is the closest facet.
+//! # Neighbourhood lists
+//! A full search ([`Neighbourhoods::new`]) records, for each query, its point `p₀`, its closest
+//! distance `d₀`, and every facet within the reach `ρ = d₀ + skin` with its distance `d₀(f)` then
+//! (sorted by it; stored in `f32`, rounded down), together with the surface's node positions `x₀`.
+//! One traversal per query finds both: a box is pruned when it is farther than the best distance
+//! so far plus the skin (queries in parallel chunks, each hinted with the previous one's answer).
 //!
-//! The walk falls back to the full tree query when there is no previous facet, when the previous
-//! facet is degenerate now or excluded, when the walk exceeds [`MAX_STEPS`], or when its answer is
-//! beyond the search distance. The tree query is then seeded with the walk's answer, which tightens
-//! its pruning. [`IncrementalStats`] counts the fallbacks.
+//! # Certificate
+//! Later, with node positions `x` and query point `p`, let `δ = maxₙ |xₙ − x₀ₙ|` over the
+//! surface's nodes and `m = |p − p₀| + δ`. Every point of a facet is a convex combination of its
+//! nodes, so it moved by at most `δ`, and the distance from the query to any facet changed by at
+//! most `m`: `d(f) ≥ d₀(f) − m`. The query measures its listed facets in increasing `d₀(f)` until
+//! `d₀(f) − m` exceeds the best distance `b` found: the facets left are farther than `b`. A facet
+//! that is not listed was farther than `ρ`, so it is now farther than `ρ − m`; when `b < ρ − m` the
+//! best measured facet is the closest of all. Candidates are measured with the kernel the tree
+//! uses ([`distance_squared_to_triangle`]) and compared in the same total order (distance, then
+//! facet index), so the answer is the tree's, exactly. A margin of 10⁻⁹ of the coordinates'
+//! magnitude absorbs rounding in these bounds.
+//!
+//! A query whose answer is not certified falls back to the tree, which
+//! [`Neighbourhoods::closest_all`] updates first, once, only if some query needs it: the certified
+//! queries never touch the tree.
+//! [`IncrementalStats`] counts fallbacks and measured facets. When the nodes have moved by about
+//! half the skin, lists fail and should be made again.
+//!
+//! # Degenerate facets
+//! A listed facet that is degenerate now is skipped (checked only when it would become the best).
+//! Facets that were degenerate when the lists were made are in no list; every query measures those
+//! that are valid now.
 
 use rayon::prelude::*;
 
-use crate::closest::distance_squared_to_triangle;
-use crate::search::bvh::{Bvh, NO_SLOT};
-use crate::search::query::{Candidate, Hit, Query};
-use crate::search::surface::Surface;
+use crate::closest::{closest_point_on_triangle, distance_squared_to_triangle};
+use crate::facet::Facet;
+use crate::linalg::Vec3;
+use crate::search::bvh::{Bvh, Update};
+use crate::search::lanes;
+use crate::search::node::{as_leaf, round_down};
+use crate::search::query::{HINT_CHUNK, TIE_MARGIN, farthest_first};
+use crate::search::query::{Hit, Query};
+use crate::search::surface::{Surface, SurfaceError};
 
-/// Most facets a walk may move through before falling back to the tree.
-pub const MAX_STEPS: usize = 16;
+/// Relative margin of the certificate, on the magnitude of the coordinates and distances.
+const MARGIN: f64 = 1e-9;
 
-/// How many incremental queries fell back to the tree.
+/// What one call of [`Neighbourhoods::closest_all`] did.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct IncrementalStats {
     /// Queries answered.
     pub queries: usize,
-    /// Queries that fell back to the full tree query.
+    /// Queries whose answer was not certified by their list and fell back to the tree.
     pub fallbacks: usize,
+    /// Facets measured from the lists (all queries together).
+    pub measured: usize,
+    /// What the tree update before the fallbacks did (`None`: no fallback, tree untouched).
+    pub update: Option<Update>,
+}
+
+/// Per-query neighbourhood lists from a full search, for the incremental search.
+#[derive(Debug, Clone)]
+pub struct Neighbourhoods {
+    /// Surface node positions when the lists were made.
+    reference: Vec<Vec3>,
+    /// Query points then.
+    points: Vec<Vec3>,
+    /// Per query: the radius within which its list holds every facet (`+∞` without any facet).
+    reach: Vec<f64>,
+    /// Per query: its entries are `facets[start[i]..start[i + 1]]` (and `distances`).
+    start: Vec<usize>,
+    facets: Vec<u32>,
+    /// Distances then, rounded down to `f32`, increasing within each list.
+    distances: Vec<f32>,
+    /// Facets degenerate when the lists were made.
+    degenerate: Vec<u32>,
+}
+
+/// The best candidate of an incremental query: squared distance, facet, corners.
+type Best = Option<(f64, u32, [Vec3; 3])>;
+
+/// A query's answer from its list: `Ok(answer)` when certified, else `Err(best facet found)`,
+/// with the number of facets measured.
+type Outcome = (Result<Option<Hit>, Option<u32>>, usize);
+
+impl Neighbourhoods {
+    /// Lists, for each query, the facets within its closest distance plus `skin` (in the model's
+    /// length unit: about twice the motion expected before the lists are made again).
+    ///
+    /// `bvh` must be built or updated at `positions`.
+    ///
+    /// # Errors
+    /// [`SurfaceError::PositionCount`] if `positions` misses nodes of the surface.
+    pub fn new(
+        bvh: &Bvh,
+        surface: &Surface,
+        positions: &[Vec3],
+        queries: &[Query],
+        skin: f64,
+    ) -> Result<Self, SurfaceError> {
+        surface.check_positions(positions)?;
+        // Chunks in parallel, each query hinted with the previous one's closest facet.
+        let lists: Vec<(f64, Vec<(f64, u32)>)> = queries
+            .par_chunks(HINT_CHUNK)
+            .flat_map_iter(|chunk| {
+                let mut hint = None;
+                chunk.iter().map(move |q| {
+                    let (reach, list) = bvh.neighbourhood(surface, q, hint, skin);
+                    hint = list.first().map(|&(_, f)| f).or(hint);
+                    (reach, list)
+                })
+            })
+            .collect();
+        let mut start = Vec::with_capacity(queries.len() + 1);
+        start.push(0);
+        let total: usize = lists.iter().map(|(_, l)| l.len()).sum();
+        let (mut facets, mut distances) = (Vec::with_capacity(total), Vec::with_capacity(total));
+        for (_, list) in &lists {
+            facets.extend(list.iter().map(|&(_, f)| f));
+            distances.extend(list.iter().map(|&(d2, _)| round_down(d2.sqrt())));
+            start.push(facets.len());
+        }
+        Ok(Self {
+            reference: positions[..surface.node_count()].to_vec(),
+            points: queries.iter().map(|q| q.point).collect(),
+            reach: lists.iter().map(|(r, _)| *r).collect(),
+            start,
+            facets,
+            distances,
+            degenerate: bvh.degenerate_facets(),
+        })
+    }
+
+    /// The number of listed facets, all queries together (the lists' memory is 8 bytes each).
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.facets.len()
+    }
+
+    /// `true` when no query lists any facet.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.facets.is_empty()
+    }
+
+    /// The largest distance any surface node moved since the lists were made.
+    #[must_use]
+    pub fn motion(&self, positions: &[Vec3]) -> f64 {
+        self.reference
+            .par_iter()
+            .zip(positions.par_iter())
+            .with_min_len(4096)
+            .map(|(a, b)| (b - a).norm())
+            .reduce(|| 0.0, f64::max)
+    }
+
+    /// The closest facet to each query (the same queries, in the same order, as when the lists
+    /// were made; their points may have moved) at node `positions`, within `max_distance`: equal
+    /// to [`Bvh::closest_all`] at these positions. Queries the lists cannot certify fall back to
+    /// `bvh`, which is updated to `positions` first (once, and only then).
+    ///
+    /// # Errors
+    /// [`SurfaceError::PositionCount`] if `positions` misses nodes of the surface;
+    /// [`SurfaceError::QueryCount`] if the number of queries changed.
+    pub fn closest_all(
+        &self,
+        bvh: &mut Bvh,
+        surface: &Surface,
+        positions: &[Vec3],
+        queries: &[Query],
+        max_distance: f64,
+    ) -> Result<(Vec<Option<Hit>>, IncrementalStats), SurfaceError> {
+        surface.check_positions(positions)?;
+        if queries.len() != self.points.len() {
+            return Err(SurfaceError::QueryCount {
+                expected: self.points.len(),
+                given: queries.len(),
+            });
+        }
+        let delta = self.motion(positions);
+        let valid: Vec<u32> = self
+            .degenerate
+            .iter()
+            .copied()
+            .filter(|&f| !is_degenerate(&surface.corners(f, positions)))
+            .collect();
+        let max2 = max_distance * max_distance;
+        let outcomes: Vec<Outcome> = queries
+            .par_iter()
+            .enumerate()
+            .with_min_len(256)
+            .map(|(i, q)| self.answer(i, q, surface, positions, (delta, max2), &valid))
+            .collect();
+        let mut stats = IncrementalStats {
+            queries: queries.len(),
+            measured: outcomes.iter().map(|(_, n)| n).sum(),
+            ..IncrementalStats::default()
+        };
+        let fallbacks: Vec<(usize, Option<u32>)> = outcomes
+            .iter()
+            .enumerate()
+            .filter_map(|(i, (o, _))| o.err().map(|hint| (i, hint)))
+            .collect();
+        let mut hits: Vec<Option<Hit>> = outcomes
+            .into_iter()
+            .map(|(o, _)| o.unwrap_or(None))
+            .collect();
+        if !fallbacks.is_empty() {
+            stats.fallbacks = fallbacks.len();
+            stats.update = Some(bvh.update(surface, positions)?);
+            let tree = &*bvh;
+            let redone: Vec<Option<Hit>> = fallbacks
+                .par_iter()
+                .map(|&(i, hint)| tree.closest_with_hint(surface, &queries[i], hint, max_distance))
+                .collect();
+            for ((i, _), hit) in fallbacks.iter().zip(redone) {
+                hits[*i] = hit;
+            }
+        }
+        Ok((hits, stats))
+    }
+
+    /// Query `i` from its list (see [`Outcome`]), given the motion `δ` and the squared search
+    /// distance.
+    fn answer(
+        &self,
+        i: usize,
+        q: &Query,
+        surface: &Surface,
+        positions: &[Vec3],
+        (delta, max2): (f64, f64),
+        valid: &[u32],
+    ) -> Outcome {
+        let p0 = &self.points[i];
+        let m = (q.point - p0).norm() + delta;
+        let reach = self.reach[i];
+        let tol =
+            MARGIN * (q.point.amax() + p0.amax() + if reach.is_finite() { reach } else { 0.0 });
+        let range = self.start[i]..self.start[i + 1];
+        let mut best: Best = None;
+        let mut measured = 0;
+        for (&f, &d0) in self.facets[range.clone()]
+            .iter()
+            .zip(&self.distances[range])
+        {
+            if best.is_some_and(|(b2, _, _)| f64::from(d0) - m > b2.sqrt() + tol) {
+                break;
+            }
+            offer(&mut best, surface, positions, q, f);
+            measured += 1;
+        }
+        for &f in valid {
+            offer(&mut best, surface, positions, q, f);
+        }
+        measured += valid.len();
+        // Facets not listed are farther than `limit` now.
+        let limit = reach - m - tol;
+        let b = best.map_or(f64::INFINITY, |(b2, _, _)| b2.sqrt());
+        let certified = b < limit || max2.sqrt() < limit;
+        let outcome = if certified {
+            Ok(best
+                .filter(|(b2, _, _)| *b2 <= max2)
+                .map(|(_, facet, [a, b, c])| Hit {
+                    facet,
+                    closest: closest_point_on_triangle(&a, &b, &c, &q.point),
+                }))
+        } else {
+            Err(best.map(|(_, f, _)| f))
+        };
+        (outcome, measured)
+    }
 }
 
 impl Bvh {
-    /// Offers `facet` to the walk's best candidate, if it is in the tree and not excluded.
-    #[inline]
-    fn offer_facet(&self, surface: &Surface, q: &Query, facet: u32, best: &mut Option<Candidate>) {
-        let slot = self.slot[facet as usize];
-        if slot == NO_SLOT || q.excludes(surface, facet) {
-            return;
-        }
-        let c = &self.corners[slot as usize];
-        let d2 = distance_squared_to_triangle(&c[0], &c[1], &c[2], &q.point);
-        Candidate::offer(best, d2, facet, c, f64::INFINITY);
-    }
-
-    /// The walk from `start`: the candidate it ends on, and whether it completed.
-    fn walk(
+    /// Every facet within `skin` of the closest distance `d` to `q`, as `(squared distance, facet)`
+    /// sorted by distance then index, and the reach `d + skin` (`+∞` without any facet). One
+    /// traversal: a box is pruned when it is farther than the best distance so far plus `skin`.
+    fn neighbourhood(
         &self,
         surface: &Surface,
         q: &Query,
-        start: u32,
-        max2: f64,
-    ) -> (Option<Candidate>, bool) {
-        if start as usize >= surface.len() {
-            return (None, false);
-        }
-        let mut best = None;
-        self.offer_facet(surface, q, start, &mut best);
-        let Some(mut current) = best else {
-            return (None, false);
-        };
-        for _ in 0..MAX_STEPS {
-            for &f in surface.neighbours(current.facet) {
-                self.offer_facet(surface, q, f, &mut best);
+        hint: Option<u32>,
+        skin: f64,
+    ) -> (f64, Vec<(f64, u32)>) {
+        let mut best = hint
+            .and_then(|f| self.candidate(surface, q, f))
+            .map_or(f64::INFINITY, |c| c.d2);
+        let bound = |best: f64| (best.sqrt() + skin).powi(2) * TIE_MARGIN;
+        let mut found = Vec::new();
+        let mut stack = vec![(self.root, 0.0)];
+        while let Some((child, d2_box)) = stack.pop() {
+            if d2_box > bound(best) {
+                continue;
             }
-            match best {
-                Some(b) if b.facet != current.facet => current = b,
-                _ => return (Some(current), current.d2 <= max2),
+            if let Some((first, count)) = as_leaf(child) {
+                if count == 0 {
+                    continue;
+                }
+                let corners = &self.corners[first..first + count];
+                let d2 = lanes::distances_squared(corners, &q.point);
+                for (k, &d2) in d2.iter().enumerate().take(count) {
+                    let facet = self.order[first + k];
+                    if !q.excludes(surface, facet) && d2 <= bound(best) {
+                        best = best.min(d2);
+                        found.push((d2, facet));
+                    }
+                }
+                continue;
+            }
+            let node = &self.nodes[child as usize];
+            let limit = bound(best);
+            for (d, c) in farthest_first(node.child_distances_squared(&q.point), node.child) {
+                if d <= limit && d < f64::INFINITY {
+                    stack.push((c, d));
+                }
             }
         }
-        (best, false)
+        if best == f64::INFINITY {
+            return (f64::INFINITY, Vec::new());
+        }
+        let reach = best.sqrt() + skin;
+        found.retain(|&(d2, _)| d2 <= reach * reach);
+        found.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        (reach, found)
     }
+}
 
-    /// The closest facet to `q`, walking from `previous` (the facet it had last time); the flag
-    /// says whether the query fell back to the tree.
-    #[must_use]
-    pub fn closest_from(
-        &self,
-        surface: &Surface,
-        q: &Query,
-        previous: Option<u32>,
-        max_distance: f64,
-    ) -> (Option<Hit>, bool) {
-        let max2 = max_distance * max_distance;
-        let seed = match previous {
-            Some(start) => match self.walk(surface, q, start, max2) {
-                (Some(c), true) => return (Some(c.finish(q)), false),
-                (c, false) => c,
-                (None, true) => None,
-            },
-            None => None,
-        };
-        let best = self.closest_candidate(surface, q, max2, seed);
-        (best.map(|c| c.finish(q)), true)
+/// Offers `facet` at `positions` to `best`, in the tree's order (distance, then index); skipped
+/// when the query excludes it, or when it would win but is degenerate now.
+fn offer(best: &mut Best, surface: &Surface, positions: &[Vec3], q: &Query, facet: u32) {
+    if q.excludes(surface, facet) {
+        return;
     }
+    let c = surface.corners(facet, positions);
+    let d2 = distance_squared_to_triangle(&c[0], &c[1], &c[2], &q.point);
+    let better = match best {
+        None => true,
+        Some((b2, bf, _)) => d2 < *b2 || (d2 == *b2 && facet < *bf),
+    };
+    if better && !is_degenerate(&c) {
+        *best = Some((d2, facet, c));
+    }
+}
 
-    /// [`Bvh::closest_from`] for many queries in parallel, with the fallback count.
-    #[must_use]
-    pub fn closest_all_from(
-        &self,
-        surface: &Surface,
-        queries: &[Query],
-        previous: &[Option<u32>],
-        max_distance: f64,
-    ) -> (Vec<Option<Hit>>, IncrementalStats) {
-        let results: Vec<(Option<Hit>, bool)> = queries
-            .par_iter()
-            .zip(previous.par_iter())
-            .with_min_len(256)
-            .map(|(q, prev)| self.closest_from(surface, q, *prev, max_distance))
-            .collect();
-        let stats = IncrementalStats {
-            queries: results.len(),
-            fallbacks: results.iter().filter(|(_, fell_back)| *fell_back).count(),
-        };
-        (results.into_iter().map(|(h, _)| h).collect(), stats)
-    }
+/// `true` when the facet is degenerate (the tree leaves such facets out).
+fn is_degenerate([a, b, c]: &[Vec3; 3]) -> bool {
+    Facet::new(*a, *b, *c).is_err()
 }

@@ -107,6 +107,25 @@ fn collapse(binary: &[Binary], child: Child, out: &mut Vec<Node>) -> Child {
     index(at)
 }
 
+/// The number of internal nodes on the longest path down from `root`. Children are stored after
+/// their parent, so one backward pass sees every child before its parent.
+pub(crate) fn depth(nodes: &[Node], root: Child) -> usize {
+    if as_leaf(root).is_some() {
+        return 0;
+    }
+    let mut depth = vec![0usize; nodes.len()];
+    for i in (0..nodes.len()).rev() {
+        depth[i] = 1 + nodes[i]
+            .child
+            .iter()
+            .filter(|&&c| as_leaf(c).is_none())
+            .map(|&c| depth[c as usize])
+            .max()
+            .unwrap_or(0);
+    }
+    depth[root as usize]
+}
+
 /// Node and slot indices are `u32`; [`crate::search::Surface::new`] bounds the facet count to 2²⁸.
 #[inline]
 pub(crate) fn index(i: usize) -> u32 {
@@ -168,6 +187,10 @@ mod tests {
         }
         assert!(seen.iter().all(|&s| s == 1));
         assert!(reached.iter().all(|&r| r == 1));
+        // The depth bounds the traversal stack: at least log₄ of the leaf count.
+        let d = depth(&nodes, root);
+        assert!((8..40).contains(&d), "depth {d}");
+        assert_eq!(depth(&nodes, leaf(0, 3)), 0);
         // Every node has at least two children; the collapse gives many four (the others sit
         // above leaves).
         let used = |n: &Node| n.child.iter().filter(|&&c| c != EMPTY).count();

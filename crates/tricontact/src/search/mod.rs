@@ -4,8 +4,11 @@
 //! * [`aabb`], [`morton`]: boxes and Z-order codes;
 //! * [`bvh`]: the bounding-volume hierarchy (parallel build, refit, rebuild on degraded quality);
 //! * [`layout`]: its topology (Morton splits collapsed to four-wide nodes); `node`: its nodes;
-//! * [`query`]: closest facet and facets within a distance, parallel over nodes, deterministic;
-//! * [`incremental`]: the neighbourhood walk from last increment's facet, with tree fallback.
+//! * [`query`]: closest facet and facets within a distance, parallel over nodes, deterministic,
+//!   optionally from a hint facet; `lanes`: four facets measured at once;
+//! * [`packet`]: coherent batches, a packet of consecutive queries sharing one traversal;
+//! * [`incremental`]: answers again after a small motion from per-query neighbourhood lists, with
+//!   a certificate from the largest motion, and tree fallback.
 //!
 //! The search uses the kernel's closest-point query, so each answer says whether the node faces the
 //! interior, an edge or a vertex of its facet.
@@ -13,15 +16,17 @@
 pub mod aabb;
 pub mod bvh;
 pub mod incremental;
+pub(crate) mod lanes;
 pub mod layout;
 pub mod morton;
 pub(crate) mod node;
+pub mod packet;
 pub mod query;
 pub mod scenes;
 pub mod surface;
 
 pub use aabb::Aabb;
 pub use bvh::{Bvh, LEAF_SIZE, REBUILD_RATIO, Update};
-pub use incremental::{IncrementalStats, MAX_STEPS};
-pub use query::{Hit, Query, brute_force_closest, measure, sort_hits};
+pub use incremental::{IncrementalStats, Neighbourhoods};
+pub use query::{HINT_CHUNK, Hit, Query, brute_force_closest, measure, sort_hits};
 pub use surface::{Surface, SurfaceError};

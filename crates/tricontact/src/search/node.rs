@@ -75,6 +75,42 @@ impl Node {
         d
     }
 
+    /// Squared distances from the box `b` to the four child boxes (zero where they overlap, `+∞`
+    /// for empty slots): a lower bound of the squared distance from any point of `b`.
+    #[inline]
+    pub(crate) fn child_distances_squared_to_box(&self, b: &Aabb) -> [f64; WIDTH] {
+        let mut d = [0.0f64; WIDTH];
+        for axis in 0..3 {
+            let (bl, bh) = (b.min[axis], b.max[axis]);
+            let (lo, hi) = (&self.lo[axis], &self.hi[axis]);
+            for ((dk, &l), &h) in d.iter_mut().zip(lo).zip(hi) {
+                let below = f64::from(l) - bh;
+                let above = bl - f64::from(h);
+                let g = if below > above { below } else { above };
+                let g = if g > 0.0 { g } else { 0.0 };
+                *dk += g * g;
+            }
+        }
+        d
+    }
+
+    /// The box of child `k` (as stored: `f32`, rounded outwards).
+    #[inline]
+    pub(crate) fn child_box(&self, k: usize) -> Aabb {
+        Aabb {
+            min: Vec3::new(
+                f64::from(self.lo[0][k]),
+                f64::from(self.lo[1][k]),
+                f64::from(self.lo[2][k]),
+            ),
+            max: Vec3::new(
+                f64::from(self.hi[0][k]),
+                f64::from(self.hi[1][k]),
+                f64::from(self.hi[2][k]),
+            ),
+        }
+    }
+
     /// Stores `b` as the box of child `k`, rounded outwards to `f32`.
     pub(crate) fn set_child_box(&mut self, k: usize, b: &Aabb) {
         for axis in 0..3 {
@@ -86,7 +122,7 @@ impl Node {
 
 /// The largest `f32` not above `x`.
 #[allow(clippy::cast_possible_truncation)]
-fn round_down(x: f64) -> f32 {
+pub(crate) fn round_down(x: f64) -> f32 {
     let y = x as f32;
     if f64::from(y) > x { y.next_down() } else { y }
 }

@@ -1,12 +1,23 @@
 //! Queries: the closest facet to a point, and every facet within a distance.
 //!
 //! # Closest facet
-//! Depth-first traversal with an explicit stack, nearer child first. A subtree is pruned when the
+//! Depth-first traversal with an explicit stack, nearer child first: the four children of a node
+//! are sorted by the distance to their boxes (a sorting network) and pushed without branches, the
+//! top of the stack advancing only for children within the bound. A subtree is pruned when the
 //! squared distance to its box exceeds the best squared distance so far (with a relative margin of
-//! 1e-12, so that exact ties are never pruned). Candidates are compared by the branch-free
-//! [`distance_squared_to_triangle`] on the corner copies the tree keeps in leaf order; only the
-//! winner is measured with the kernel's [`closest_point_on_triangle`], which says where its closest
-//! point lies (face, edge, vertex) and gives the reported distance.
+//! 1e-12, so that exact ties are never pruned). The facets of a leaf are measured together
+//! (`lanes`: the branch-free [`distance_squared_to_triangle`], bit for bit, four
+//! facets at a time) on the corner copies the tree keeps in leaf order; only the winner is measured
+//! with the kernel's [`closest_point_on_triangle`], which says where its closest point lies (face,
+//! edge, vertex) and gives the reported distance.
+//!
+//! # Hints
+//! A query may start from a hint facet ([`Bvh::closest_with_hint`]): its exact squared distance is
+//! the first bound, so boxes farther than it are pruned from the root down. Since the bound is
+//! inclusive and ties are decided by the order below, a hint never changes the answer.
+//! [`Bvh::closest_all`] cuts the queries into chunks of [`HINT_CHUNK`], answered in parallel;
+//! within a chunk, packets of consecutive queries share one traversal ([`crate::search::packet`])
+//! and each query is hinted with the previous answer.
 //!
 //! # Ties and determinism
 //! A candidate is better when its squared distance is smaller, or equal with a smaller facet index.
@@ -23,8 +34,9 @@ use rayon::prelude::*;
 use crate::closest::{ClosestPoint, closest_point_on_triangle, distance_squared_to_triangle};
 use crate::facet::Facet;
 use crate::linalg::Vec3;
-use crate::search::bvh::{Bvh, index};
-use crate::search::node::as_leaf;
+use crate::search::bvh::{Bvh, NO_SLOT, index};
+use crate::search::lanes;
+use crate::search::node::{Child, EMPTY, as_leaf};
 use crate::search::surface::Surface;
 
 thread_local! {
@@ -32,8 +44,11 @@ thread_local! {
     static STACK: std::cell::RefCell<Vec<(u32, f64)>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
+/// Queries per sequential chunk of [`Bvh::closest_all`] (packets and hints run within a chunk).
+pub const HINT_CHUNK: usize = 256;
+
 /// Relative margin on squared distances below which a box is never pruned.
-const TIE_MARGIN: f64 = 1.0 + 1e-12;
+pub(crate) const TIE_MARGIN: f64 = 1.0 + 1e-12;
 
 /// A facet found by a query, with the closest point on it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -143,6 +158,40 @@ impl Bvh {
             .map(|c| c.finish(q))
     }
 
+    /// [`Bvh::closest`] seeded with `hint`, a facet likely to be close to `q` (the answer of a
+    /// neighbouring query, or of the same node last time). The exact squared distance to the hint
+    /// bounds the search from the first node, so fewer boxes pass; the answer is the same as
+    /// without the hint (the bound is inclusive and ties still go to the lower index). A hint that
+    /// is out of range, degenerate or excluded is ignored.
+    #[must_use]
+    pub fn closest_with_hint(
+        &self,
+        surface: &Surface,
+        q: &Query,
+        hint: Option<u32>,
+        max_distance: f64,
+    ) -> Option<Hit> {
+        let seed = hint.and_then(|f| self.candidate(surface, q, f));
+        self.closest_candidate(surface, q, max_distance * max_distance, seed)
+            .map(|c| c.finish(q))
+    }
+
+    /// `facet` as a candidate for `q`: `None` when it is out of range, degenerate (not in the tree)
+    /// or excluded by the query.
+    #[inline]
+    pub(crate) fn candidate(&self, surface: &Surface, q: &Query, facet: u32) -> Option<Candidate> {
+        let slot = *self.slot.get(facet as usize)?;
+        if slot == NO_SLOT || q.excludes(surface, facet) {
+            return None;
+        }
+        let c = &self.corners[slot as usize];
+        Some(Candidate {
+            d2: distance_squared_to_triangle(&c[0], &c[1], &c[2], &q.point),
+            facet,
+            corners: *c,
+        })
+    }
+
     /// The best candidate, starting from `seed` (which tightens pruning from the first node).
     pub(crate) fn closest_candidate(
         &self,
@@ -154,43 +203,60 @@ impl Bvh {
         let p = &q.point;
         let mut best = seed.filter(|c| c.d2 <= max2);
         // (child reference, squared distance to its box), in a per-thread buffer reused from query
-        // to query.
+        // to query, long enough for the deepest path (each level leaves at most three siblings).
         STACK.with_borrow_mut(|stack| {
-            stack.clear();
-            stack.push((self.root, 0.0f64));
-            while let Some((child, d2_box)) = stack.pop() {
-                if d2_box > Candidate::bound(&best, max2) {
+            if stack.len() < self.stack_size {
+                stack.resize(self.stack_size, (EMPTY, 0.0));
+            }
+            stack[0] = (self.root, 0.0);
+            let mut top = 1;
+            while top > 0 {
+                top -= 1;
+                let (child, d2_box) = stack[top];
+                let bound = Candidate::bound(&best, max2);
+                if d2_box > bound {
                     continue;
                 }
                 if let Some((first, count)) = as_leaf(child) {
-                    for s in first..first + count {
-                        let facet = self.order[s];
-                        if q.excludes(surface, facet) {
-                            continue;
-                        }
-                        let c = &self.corners[s];
-                        let d2 = distance_squared_to_triangle(&c[0], &c[1], &c[2], p);
-                        Candidate::offer(&mut best, d2, facet, c, max2);
+                    if count > 0 {
+                        self.offer_leaf(surface, q, first, count, max2, &mut best);
                     }
                     continue;
                 }
                 let node = &self.nodes[child as usize];
-                let d = node.child_distances_squared(p);
-                let bound = Candidate::bound(&best, max2);
-                // Push the children within the bound with the nearest last, so it is popped next.
-                // Empty slots are infinitely far; an unbounded query must still skip them.
-                let nearest = nearest_slot(&d);
-                for k in (0..4)
-                    .filter(|&k| k != nearest)
-                    .chain(std::iter::once(nearest))
-                {
-                    if d[k] <= bound && d[k] < f64::INFINITY {
-                        stack.push((node.child[k], d[k]));
-                    }
+                // Children within the bound, farthest pushed first so the nearest is popped next;
+                // every slot is written and the top only advances for an accepted child, so the
+                // push has no branch. Empty slots are infinitely far; an unbounded query must still
+                // skip them.
+                for (d, c) in farthest_first(node.child_distances_squared(p), node.child) {
+                    stack[top] = (c, d);
+                    top += usize::from(d <= bound && d < f64::INFINITY);
                 }
             }
         });
         best
+    }
+
+    /// Offers the facets of the leaf `first..first + count` (evaluated together, see
+    /// [`lanes`]) to `best`.
+    #[inline]
+    pub(crate) fn offer_leaf(
+        &self,
+        surface: &Surface,
+        q: &Query,
+        first: usize,
+        count: usize,
+        max2: f64,
+        best: &mut Option<Candidate>,
+    ) {
+        let corners = &self.corners[first..first + count];
+        let d2 = lanes::distances_squared(corners, &q.point);
+        for (k, c) in corners.iter().enumerate() {
+            let facet = self.order[first + k];
+            if !q.excludes(surface, facet) {
+                Candidate::offer(best, d2[k], facet, c, max2);
+            }
+        }
     }
 
     /// Every facet within `radius` of `q`, sorted by distance then facet index.
@@ -233,6 +299,11 @@ impl Bvh {
 
     /// [`Bvh::closest`] for many queries in parallel; the result is independent of the thread
     /// count.
+    ///
+    /// The queries are cut into chunks of [`HINT_CHUNK`]; within a chunk, packets of consecutive
+    /// queries share one traversal ([`crate::search::packet`]) and each query is hinted with the
+    /// previous answer ([`Bvh::closest_with_hint`]). This speeds up a spatially coherent batch
+    /// (neighbouring nodes one after the other) and leaves every answer unchanged.
     #[must_use]
     pub fn closest_all(
         &self,
@@ -240,20 +311,32 @@ impl Bvh {
         queries: &[Query],
         max_distance: f64,
     ) -> Vec<Option<Hit>> {
-        queries
-            .par_iter()
-            .with_min_len(256)
-            .map(|q| self.closest(surface, q, max_distance))
-            .collect()
+        let mut out = vec![None; queries.len()];
+        let max2 = max_distance * max_distance;
+        out.par_chunks_mut(HINT_CHUNK)
+            .zip(queries.par_chunks(HINT_CHUNK))
+            .for_each(|(hits, qs)| self.closest_chunk(surface, qs, hits, max2));
+        out
     }
 }
 
-/// The slot of the smallest of four distances (the first on ties).
+/// The four `(distance, child)` pairs sorted by decreasing distance (a five-exchange sorting
+/// network, branch-free).
 #[inline]
-fn nearest_slot(d: &[f64; 4]) -> usize {
-    let a = if d[1] < d[0] { 1 } else { 0 };
-    let b = if d[3] < d[2] { 3 } else { 2 };
-    if d[b] < d[a] { b } else { a }
+pub(crate) fn farthest_first(d: [f64; 4], child: [Child; 4]) -> [(f64, Child); 4] {
+    let mut v = [
+        (d[0], child[0]),
+        (d[1], child[1]),
+        (d[2], child[2]),
+        (d[3], child[3]),
+    ];
+    for (i, j) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
+        let (a, b) = (v[i], v[j]);
+        let swap = a.0 < b.0;
+        v[i] = if swap { b } else { a };
+        v[j] = if swap { a } else { b };
+    }
+    v
 }
 
 /// Sorts hits by distance, then facet index.

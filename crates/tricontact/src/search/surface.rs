@@ -2,8 +2,8 @@
 //!
 //! Node positions are not stored: every search call takes the current positions, so the same
 //! surface serves every increment. Facet adjacency (facets sharing at least one node, the facet
-//! itself excluded, sorted by index) is built once, in compressed-row form, for the incremental
-//! search's neighbourhood walk.
+//! itself excluded, sorted by index) is built once, in compressed-row form, for callers that walk
+//! the surface.
 
 use thiserror::Error;
 
@@ -33,6 +33,14 @@ pub enum SurfaceError {
     TooLarge {
         /// The number of facets given.
         facets: usize,
+    },
+    /// An incremental search was given another number of queries than its lists were made for.
+    #[error("the neighbourhood lists were made for {expected} queries but {given} were given")]
+    QueryCount {
+        /// Queries the lists were made for.
+        expected: usize,
+        /// Queries given.
+        given: usize,
     },
     /// A facet names the same node twice.
     #[error("facet {facet} repeats node {node}")]

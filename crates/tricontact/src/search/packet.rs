@@ -1,0 +1,248 @@
+//! Coherent batches: a packet of consecutive queries shares one traversal.
+//!
+//! Queries that come in spatial order (the nodes of a slave surface, numbered along it) ask about
+//! the same few leaves. For a packet of [`PACKET`] consecutive queries with bounding box `Q`, one
+//! traversal gathers every leaf whose box is within a radius `R` of `Q`. Each query then measures
+//! only the gathered leaves whose boxes are within its own bound (a flat, vectorisable loop over
+//! the gathered boxes), starting from the previous query's answer as a hint.
+//!
+//! # Exactness
+//! A leaf left out is farther than `R` from `Q`, hence from every query of the packet. So when a
+//! query's best squared distance `b²` satisfies `b² ≤ R²`, no facet outside the gathered leaves can
+//! beat or tie it (the gathering bound has the same relative tie margin as the tree's pruning), and
+//! the answer — the best in the total order (distance, then facet index) — is the tree's. When a
+//! query's answer is not certified that way (it is farther than `R`), the query falls back to the
+//! full traversal, seeded with what it found.
+//!
+//! # Radius and fallbacks
+//! `R` follows the data: 1.25 times the largest answer distance of the previous packet, capped by
+//! the search distance (with a finite search distance `R` never needs to exceed it: answers beyond
+//! it are `None`). The first packet of a chunk is answered query by query, which gives the first
+//! estimate. A packet whose queries are spread out (random order) would gather too much: when the
+//! gathering exceeds [`MAX_LEAVES`] leaves it is abandoned and the packet is answered query by
+//! query, so an incoherent batch costs about what it costs without packets; so is a packet whose
+//! queries are spread over more than eight radii, without trying.
+
+use std::cell::RefCell;
+
+use crate::linalg::Vec3;
+use crate::search::aabb::Aabb;
+use crate::search::bvh::{Bvh, index};
+use crate::search::node::{Child, as_leaf};
+use crate::search::query::{Candidate, Hit, Query, TIE_MARGIN};
+use crate::search::surface::Surface;
+
+/// Queries per packet.
+pub const PACKET: usize = 16;
+
+/// Most leaves a packet gathers before it falls back to one traversal per query.
+pub const MAX_LEAVES: usize = 128;
+
+/// A packet whose box diagonal exceeds this many gathering radii is answered query by query.
+const SPREAD: f64 = 8.0;
+
+/// Growth of the gathering radius over the previous packet's largest answer distance.
+const RADIUS_FACTOR: f64 = 1.25;
+
+/// The leaves gathered for a packet: boxes axis by axis, and leaf references.
+#[derive(Default)]
+struct Gathered {
+    lo: [Vec<f64>; 3],
+    hi: [Vec<f64>; 3],
+    leaves: Vec<(usize, usize)>,
+    /// Per-query scratch: squared distances to the gathered boxes, and which boxes.
+    d2: Vec<f64>,
+    index: Vec<u32>,
+    /// Traversal stack of the gathering.
+    stack: Vec<Child>,
+}
+
+impl Gathered {
+    fn clear(&mut self) {
+        self.lo.iter_mut().chain(&mut self.hi).for_each(Vec::clear);
+        self.leaves.clear();
+        self.stack.clear();
+    }
+
+    fn push(&mut self, b: &Aabb, first: usize, count: usize) {
+        for axis in 0..3 {
+            self.lo[axis].push(b.min[axis]);
+            self.hi[axis].push(b.max[axis]);
+        }
+        self.leaves.push((first, count));
+    }
+
+    /// Lists the gathered leaves whose boxes are within `bound` (squared) of `p`: their indices
+    /// and squared distances go to the front of `self.index` and `self.d2`; returns how many.
+    fn candidates(&mut self, p: &Vec3, bound: f64) -> usize {
+        let n = self.leaves.len();
+        self.d2.clear();
+        self.d2.resize(n, 0.0);
+        self.index.resize(n, 0);
+        for axis in 0..3 {
+            let x = p[axis];
+            let (lo, hi) = (&self.lo[axis][..n], &self.hi[axis][..n]);
+            for ((d, &l), &h) in self.d2.iter_mut().zip(lo).zip(hi) {
+                let below = l - x;
+                let above = x - h;
+                let g = if below > above { below } else { above };
+                let g = if g > 0.0 { g } else { 0.0 };
+                *d += g * g;
+            }
+        }
+        // Compaction in place: slot `kept` is written before it is read again.
+        let mut kept = 0;
+        for j in 0..n {
+            let d = self.d2[j];
+            self.d2[kept] = d;
+            self.index[kept] = index(j);
+            kept += usize::from(d <= bound);
+        }
+        kept
+    }
+}
+
+thread_local! {
+    static GATHERED: RefCell<Gathered> = RefCell::new(Gathered::default());
+}
+
+/// The state carried from packet to packet within a chunk.
+#[derive(Debug, Clone, Copy)]
+struct Chain {
+    /// The previous answer: the next query's hint.
+    hint: Option<u32>,
+    /// The gathering radius squared for the next packet (`+∞` until a packet has an answer).
+    radius2: f64,
+}
+
+impl Chain {
+    const START: Chain = Chain {
+        hint: None,
+        radius2: f64::INFINITY,
+    };
+}
+
+impl Bvh {
+    /// Answers a chunk of queries, packet by packet, into `out`.
+    pub(crate) fn closest_chunk(
+        &self,
+        surface: &Surface,
+        queries: &[Query],
+        out: &mut [Option<Hit>],
+        max2: f64,
+    ) {
+        let mut chain = Chain::START;
+        for (qs, hits) in queries.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
+            let radius2 = chain.radius2.min(max2);
+            GATHERED.with_borrow_mut(|g| {
+                if radius2 < f64::INFINITY && self.gather(qs, radius2, g) {
+                    self.answer_packet(surface, qs, hits, (max2, radius2), &mut chain.hint, g);
+                } else {
+                    self.answer_each(surface, qs, hits, max2, &mut chain.hint);
+                }
+            });
+            let largest = hits.iter().flatten().map(|h| h.closest.distance);
+            chain.radius2 = largest
+                .reduce(f64::max)
+                .map_or(f64::INFINITY, |d| (RADIUS_FACTOR * d).powi(2));
+        }
+    }
+
+    /// Answers `queries` one traversal each, each hinted with the previous answer.
+    fn answer_each(
+        &self,
+        surface: &Surface,
+        queries: &[Query],
+        hits: &mut [Option<Hit>],
+        max2: f64,
+        hint: &mut Option<u32>,
+    ) {
+        for (q, hit) in queries.iter().zip(hits.iter_mut()) {
+            let seed = hint.and_then(|f| self.candidate(surface, q, f));
+            *hit = self
+                .closest_candidate(surface, q, max2, seed)
+                .map(|c| c.finish(q));
+            *hint = hit.map(|h| h.facet).or(*hint);
+        }
+    }
+
+    /// Gathers into `g` the leaves within `radius2` (squared) of the box of `queries`; `false`
+    /// when there are more than [`MAX_LEAVES`].
+    fn gather(&self, queries: &[Query], radius2: f64, g: &mut Gathered) -> bool {
+        g.clear();
+        let b = queries
+            .iter()
+            .fold(Aabb::EMPTY, |b, q| b.union_point(&q.point));
+        // Queries spread over more than a few radii (random order) would gather too much. A box
+        // that is not finite (a query at NaN or infinity) gathers nothing reliably: the certificate
+        // needs every leaf left out to be far, not merely incomparable.
+        let spread2 = (b.max - b.min).norm_squared();
+        if !spread2.is_finite() || spread2 > SPREAD * SPREAD * radius2 {
+            return false;
+        }
+        let bound = radius2 * TIE_MARGIN;
+        // A tree that is a single leaf has no box to gather.
+        if as_leaf(self.root).is_some() {
+            return false;
+        }
+        g.stack.push(self.root);
+        while let Some(child) = g.stack.pop() {
+            let node = &self.nodes[child as usize];
+            let d = node.child_distances_squared_to_box(&b);
+            for (k, &c) in node.child.iter().enumerate() {
+                if !(d[k] <= bound && d[k] < f64::INFINITY) {
+                    continue;
+                }
+                match as_leaf(c) {
+                    Some((first, count)) => {
+                        if g.leaves.len() == MAX_LEAVES {
+                            return false;
+                        }
+                        g.push(&node.child_box(k), first, count);
+                    }
+                    None => g.stack.push(c),
+                }
+            }
+        }
+        true
+    }
+
+    /// Answers the packet `queries` from the gathered leaves `g`, gathered within `radius2` (the
+    /// second of `bounds`, the first being the squared search distance); a query whose answer is
+    /// not certified falls back to the full traversal.
+    fn answer_packet(
+        &self,
+        surface: &Surface,
+        queries: &[Query],
+        hits: &mut [Option<Hit>],
+        (max2, radius2): (f64, f64),
+        hint: &mut Option<u32>,
+        g: &mut Gathered,
+    ) {
+        for (q, hit) in queries.iter().zip(hits.iter_mut()) {
+            let mut best = hint
+                .and_then(|f| self.candidate(surface, q, f))
+                .filter(|c| c.d2 <= max2);
+            // The leaves within the first bound, listed without branches, then measured while
+            // the bound shrinks.
+            let n = g.candidates(&q.point, Candidate::bound(&best, max2));
+            if n > 0 {
+                // The nearest box first: it usually holds the answer, which then prunes the rest.
+                let nearest = (1..n).fold(0, |m, i| if g.d2[i] < g.d2[m] { i } else { m });
+                g.d2.swap(0, nearest);
+                g.index.swap(0, nearest);
+            }
+            for i in 0..n {
+                let (d2, (first, count)) = (g.d2[i], g.leaves[g.index[i] as usize]);
+                if d2 <= Candidate::bound(&best, max2) {
+                    self.offer_leaf(surface, q, first, count, max2, &mut best);
+                }
+            }
+            if best.map_or(max2, |b| b.d2) > radius2 {
+                best = self.closest_candidate(surface, q, max2, best);
+            }
+            *hit = best.map(|c| c.finish(q));
+            *hint = hit.map(|h| h.facet).or(*hint);
+        }
+    }
+}
