@@ -41,9 +41,14 @@ pub trait ExtraTerms: Send {
     fn num_extra(&self) -> usize {
         0
     }
-    /// Whether the added tangent is symmetric (keeps Cholesky usable).
+    /// Whether the added tangent is symmetric (keeps Cholesky or `LDLᵀ` usable).
     fn symmetric(&self) -> bool {
         true
+    }
+    /// Whether the tangent stays positive definite with the added terms (`false` for the
+    /// saddle-point systems of multipliers: `LDLᵀ` instead of Cholesky).
+    fn definite(&self) -> bool {
+        self.num_extra() == 0
     }
     /// Whether the terms are nonlinear in `u`: disables the constant-tangent
     /// shortcut of small-strain steps.

@@ -2,9 +2,13 @@
 //!
 //! Symmetric systems are factored with a supernodal/simplicial Cholesky
 //! `K = L Lᵀ` (lower triangle read), with a caller-supplied fill-reducing
-//! ordering (nested dissection, [`crate::ordering`]) or faer's AMD; when that fails (not positive
-//! definite, e.g. past a limit point) or the system is unsymmetric, a sparse
-//! LU with partial pivoting is used. The symbolic analysis (fill-reducing
+//! ordering (nested dissection, [`crate::ordering`]) or faer's AMD. When that fails (not positive
+//! definite: the saddle-point systems of contact multipliers, or past a limit point), the same
+//! symbolic structure is used for `K = L D Lᵀ` without pivoting, accepted only if the solution of
+//! `K x = K·1` has a small backward error (`‖K x − b‖ ≤ 10⁻¹⁰ (‖K‖_F ‖x‖ + ‖b‖)`); otherwise,
+//! and for unsymmetric systems, a sparse LU with partial pivoting is used. Multipliers are ordered
+//! after the displacements they constrain, so their `LDLᵀ` pivots are the (negative) Schur
+//! complements `−bᵀK⁻¹b` and no pivoting is needed. The symbolic analysis (fill-reducing
 //! ordering, elimination tree) is kept and reused while the pattern is
 //! unchanged. A failed LU, or a non-finite solution, is reported as a
 //! singular system.
@@ -16,7 +20,7 @@ use faer::linalg::solvers::Solve;
 use faer::perm::PermRef;
 use faer::sparse::SparseColMatRef;
 use faer::sparse::linalg::cholesky::{
-    LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
+    LdltRef, LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
 };
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::{Conj, Side};
@@ -33,6 +37,8 @@ pub struct Cholesky {
 pub enum Factor {
     /// Cholesky.
     Llt(Cholesky),
+    /// `L D Lᵀ` without pivoting (symmetric indefinite).
+    Ldlt(Cholesky),
     /// LU with partial pivoting.
     Lu(Box<Lu<usize, f64>>),
 }
@@ -53,6 +59,16 @@ impl Factor {
                     MemStack::new(&mut mem),
                 );
             }
+            Self::Ldlt(f) => {
+                let par = faer::get_global_parallelism();
+                let mut mem = MemBuffer::new(f.symbolic.solve_in_place_scratch::<f64>(1, par));
+                LdltRef::new(&f.symbolic, &f.values).solve_in_place_with_conj(
+                    Conj::No,
+                    rhs.as_mut(),
+                    par,
+                    MemStack::new(&mut mem),
+                );
+            }
             Self::Lu(f) => f.solve_in_place(rhs.as_mut()),
         }
         (0..b.len()).map(|i| rhs[(i, 0)]).collect()
@@ -63,7 +79,7 @@ impl Factor {
     #[must_use]
     pub fn factor_size(&self) -> (usize, bool) {
         match self {
-            Self::Llt(f) => (
+            Self::Llt(f) | Self::Ldlt(f) => (
                 f.values.len(),
                 matches!(
                     f.symbolic.raw(),
@@ -74,14 +90,26 @@ impl Factor {
         }
     }
 
-    /// `"cholesky"` or `"lu"`.
+    /// `"cholesky"`, `"ldlt"` or `"lu"`.
     #[must_use]
     pub fn method(&self) -> &'static str {
         match self {
             Self::Llt(_) => "cholesky",
+            Self::Ldlt(_) => "ldlt",
             Self::Lu(_) => "lu",
         }
     }
+}
+
+/// What is known of a matrix before it is factored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Structure {
+    /// Symmetric, expected positive definite: Cholesky, then `LDLᵀ`, then LU.
+    SymmetricDefinite,
+    /// Symmetric indefinite (saddle point of multipliers): `LDLᵀ`, then LU.
+    SymmetricIndefinite,
+    /// Unsymmetric: LU.
+    Unsymmetric,
 }
 
 /// Why a factorization failed.
@@ -149,16 +177,23 @@ impl LinearSolver {
         Ok(())
     }
 
-    /// Factors `a`: Cholesky if `symmetric` and it succeeds, LU otherwise.
+    /// Factors `a` by the first of the methods its [`Structure`] allows that succeeds.
     ///
     /// # Errors
     /// [`Singular`] when LU fails too.
     pub fn factor(
         &mut self,
         a: SparseColMatRef<'_, usize, f64>,
-        symmetric: bool,
+        structure: Structure,
     ) -> Result<Factor, Singular> {
-        if symmetric {
+        if structure == Structure::SymmetricIndefinite {
+            self.analyze(a)?;
+            let symbolic = self.llt.clone().expect("analysed");
+            if let Some(f) = ldlt(&symbolic, a) {
+                return Ok(f);
+            }
+        }
+        if structure == Structure::SymmetricDefinite {
             self.analyze(a)?;
             let symbolic = self.llt.clone().expect("analysed");
             let par = faer::get_global_parallelism();
@@ -179,6 +214,9 @@ impl LinearSolver {
             if ok {
                 return Ok(Factor::Llt(Cholesky { symbolic, values }));
             }
+            if let Some(f) = ldlt(&symbolic, a) {
+                return Ok(f);
+            }
         }
         if self.lu.is_none() {
             self.lu =
@@ -189,6 +227,52 @@ impl LinearSolver {
             .map(|f| Factor::Lu(Box::new(f)))
             .map_err(|e| Singular(format!("LU factorization failed ({e:?})")))
     }
+}
+
+/// `L D Lᵀ` of `a` on the Cholesky structure, if it exists and solves `a x = a·1` accurately.
+fn ldlt(
+    symbolic: &Arc<SymbolicCholesky<usize>>,
+    a: SparseColMatRef<'_, usize, f64>,
+) -> Option<Factor> {
+    let par = faer::get_global_parallelism();
+    let mut values = vec![0.0; symbolic.len_val()];
+    let req = symbolic.factorize_numeric_ldlt_scratch::<f64>(par, Default::default());
+    let mut mem = MemBuffer::try_new(req).ok()?;
+    symbolic
+        .factorize_numeric_ldlt::<f64>(
+            &mut values,
+            a,
+            Side::Lower,
+            Default::default(),
+            par,
+            MemStack::new(&mut mem),
+            Default::default(),
+        )
+        .ok()?;
+    let factor = Factor::Ldlt(Cholesky {
+        symbolic: symbolic.clone(),
+        values,
+    });
+    let ones = vec![1.0; a.ncols()];
+    let b = matvec(a, &ones);
+    let x = factor.solve(&b);
+    let r = matvec(a, &x);
+    let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let frobenius = norm(a.val());
+    let residual: Vec<f64> = r.iter().zip(&b).map(|(r, b)| r - b).collect();
+    let ok = norm(&residual) <= 1e-10 * (frobenius * norm(&x) + norm(&b));
+    ok.then_some(factor)
+}
+
+/// `a x` for a matrix holding both triangles.
+fn matvec(a: SparseColMatRef<'_, usize, f64>, x: &[f64]) -> Vec<f64> {
+    let mut y = vec![0.0; a.nrows()];
+    for (j, &xj) in x.iter().enumerate() {
+        for (i, v) in a.row_idx_of_col(j).zip(a.val_of_col(j)) {
+            y[i] += v * xj;
+        }
+    }
+    y
 }
 
 #[cfg(test)]
@@ -208,27 +292,56 @@ mod tests {
         SparseColMat::try_new_from_triplets(n, n, &t).expect("valid")
     }
 
+    /// `a x = b` to 1e-9 for a matrix holding both triangles.
+    fn assert_solves(a: &SparseColMat<usize, f64>, f: &Factor, b: &[f64], what: &str) {
+        let x = f.solve(b);
+        let ax = matvec(a.as_ref(), &x);
+        for i in 0..b.len() {
+            assert!(
+                (ax[i] - b[i]).abs() < 1e-9,
+                "{what}: row {i}: {} vs {}",
+                ax[i],
+                b[i]
+            );
+        }
+    }
+
     #[test]
-    fn cholesky_solves_spd_and_lu_takes_over_when_indefinite() {
+    fn each_structure_gets_the_right_factorization() {
         let n = 20;
         let b: Vec<f64> = (0..n).map(|i| (i as f64).sin()).collect();
-        for (shift, method) in [(0.0, "cholesky"), (-2.5, "lu")] {
+        for (shift, structure, method) in [
+            (0.0, Structure::SymmetricDefinite, "cholesky"),
+            (-2.5, Structure::SymmetricDefinite, "ldlt"),
+            (-2.5, Structure::SymmetricIndefinite, "ldlt"),
+            (0.0, Structure::Unsymmetric, "lu"),
+        ] {
             let a = laplacian(n, shift);
             let f = LinearSolver::new()
-                .factor(a.as_ref(), true)
+                .factor(a.as_ref(), structure)
                 .expect("regular");
-            assert_eq!(f.method(), method);
-            let x = f.solve(&b);
-            for i in 0..n {
-                let mut ax = (2.0 + shift) * x[i];
-                if i > 0 {
-                    ax -= x[i - 1];
-                }
-                if i + 1 < n {
-                    ax -= x[i + 1];
-                }
-                assert!((ax - b[i]).abs() < 1e-9, "shift {shift}: {ax} vs {}", b[i]);
-            }
+            assert_eq!(f.method(), method, "shift {shift}, {structure:?}");
+            assert_solves(&a, &f, &b, method);
+        }
+    }
+
+    #[test]
+    fn zero_pivot_saddle_point_falls_back_to_lu() {
+        // [[0, 1], [1, 0]] ⊕ [[2]]: regular, but `LDLᵀ` without pivoting meets a zero pivot.
+        let t = [
+            Triplet::new(0, 1, 1.0),
+            Triplet::new(1, 0, 1.0),
+            Triplet::new(2, 2, 2.0),
+            Triplet::new(0, 0, 0.0),
+        ];
+        let a = SparseColMat::try_new_from_triplets(3, 3, &t).expect("valid");
+        for structure in [Structure::SymmetricDefinite, Structure::SymmetricIndefinite] {
+            let f = LinearSolver::new()
+                .with_order(vec![0, 1, 2])
+                .factor(a.as_ref(), structure)
+                .expect("regular");
+            assert_eq!(f.method(), "lu", "{structure:?}");
+            assert_solves(&a, &f, &[1.0, 2.0, 3.0], "lu");
         }
     }
 }

@@ -25,7 +25,7 @@
 use crate::analysis::{Analysis, Step};
 use crate::assembly::{AssemblyError, DofMap, ExtraTerms, NO_EQ, Pattern, assemble};
 use crate::follower;
-use crate::linsolve::LinearSolver;
+use crate::linsolve::{LinearSolver, Structure};
 
 /// A converged increment.
 #[derive(Clone, Debug)]
@@ -105,7 +105,11 @@ pub fn solve_increment(
 ) -> Result<Converged, Failure> {
     let (an, dm) = (p.an, p.dm);
     let nlgeom = p.step.nlgeom;
-    let symmetric = extra.symmetric() && p.follower.is_empty();
+    let structure = match (extra.symmetric() && p.follower.is_empty(), extra.definite()) {
+        (false, _) => Structure::Unsymmetric,
+        (true, true) => Structure::SymmetricDefinite,
+        (true, false) => Structure::SymmetricIndefinite,
+    };
     let reuse = !extra.nonlinear();
     let mut u = start.to_vec();
     let mut dup = vec![0.0; u.len()];
@@ -251,7 +255,7 @@ pub fn solve_increment(
         if need_tangent {
             let k = asm.matrix(p.pat);
             let factor = solver
-                .factor(k.as_ref(), symmetric)
+                .factor(k.as_ref(), structure)
                 .map_err(|s| Failure::Singular(s.0))?;
             solver.cached = Some(factor);
         }

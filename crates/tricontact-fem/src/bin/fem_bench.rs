@@ -13,7 +13,7 @@ use std::time::Instant;
 use tricontact_fem::analysis::Analysis;
 use tricontact_fem::assembly::{DofMap, NoExtra, Pattern, assemble, node_adjacency};
 use tricontact_fem::driver::{external_forces, step_constraints};
-use tricontact_fem::linsolve::LinearSolver;
+use tricontact_fem::linsolve::{LinearSolver, Structure};
 use tricontact_fem::mesh::ElementKind;
 use tricontact_fem::model::Model;
 use tricontact_fem::ordering::equation_order;
@@ -113,7 +113,7 @@ fn main() {
     }
     let t_symbolic = t.elapsed();
     let t = Instant::now();
-    let factor = match solver.factor(k.as_ref(), true) {
+    let factor = match solver.factor(k.as_ref(), Structure::SymmetricDefinite) {
         Ok(f) => f,
         Err(e) => {
             eprintln!("error: {}", e.0);

@@ -238,7 +238,7 @@ impl ExtraTerms for ContactTerms {
     }
 
     fn symmetric(&self) -> bool {
-        self.n_extra == 0
+        true
     }
 
     fn nonlinear(&self) -> bool {
