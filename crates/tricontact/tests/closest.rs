@@ -6,6 +6,7 @@ mod common;
 use common::{CASES, REL_STEP, TOL, facet_size, fd_gradient, fd_jacobian, node, pair, rel_err};
 use nalgebra::SVector;
 use proptest::prelude::*;
+use tricontact::closest::{closest_point_and_distance_squared, distance_squared_to_triangle};
 use tricontact::{Facet, Feature, Vec3, Vec12, closest_point, point_edge, point_vertex};
 
 type Vec6 = SVector<f64, 6>;
@@ -91,6 +92,12 @@ proptest! {
                 prop_assert_eq!(cp.barycentric[k], 0.0);
             }
         }
+        // One region computation gives the closest point and, bit for bit, the squared distance
+        // the search compares.
+        let (both, d2) = closest_point_and_distance_squared(&a, &b, &c, &p);
+        prop_assert_eq!(both, cp);
+        prop_assert_eq!(d2.to_bits(), distance_squared_to_triangle(&a, &b, &c, &p).to_bits());
+        prop_assert_eq!(both.distance.to_bits(), d2.sqrt().to_bits());
     }
 }
 

@@ -67,14 +67,30 @@ pub fn closest_point(facet: &Facet, p: &Vec3) -> ClosestPoint {
 #[must_use]
 #[inline]
 pub fn closest_point_on_triangle(a: &Vec3, b: &Vec3, c: &Vec3, p: &Vec3) -> ClosestPoint {
+    closest_point_and_distance_squared(a, b, c, p).0
+}
+
+/// [`closest_point_on_triangle`] and the squared distance, bit for bit the value of
+/// [`distance_squared_to_triangle`] (the closest point's `distance` is its square root), from one
+/// Voronoi-region computation.
+#[must_use]
+#[inline]
+pub fn closest_point_and_distance_squared(
+    a: &Vec3,
+    b: &Vec3,
+    c: &Vec3,
+    p: &Vec3,
+) -> (ClosestPoint, f64) {
     let (feature, barycentric) = region(a, b, c, p);
     let point = a * barycentric[0] + b * barycentric[1] + c * barycentric[2];
-    ClosestPoint {
+    let d2 = (p - point).norm_squared();
+    let closest = ClosestPoint {
         feature,
         barycentric,
         point,
-        distance: (p - point).norm(),
-    }
+        distance: d2.sqrt(),
+    };
+    (closest, d2)
 }
 
 /// The Voronoi region of `p` and the barycentric coordinates of its closest point.
