@@ -5,7 +5,9 @@
 //! * `newton.csv` — `step,increment,iteration,relative_residual` for every converged increment,
 //!   iteration 0 being the predictor (the residual the increment starts from);
 //! * `hertz.csv` — one row per increment when the model has a `[hertz]` table (see
-//!   [`crate::hertz`]), `hertz_profile.csv` — `r, p, p_hertz` of the last increment;
+//!   [`crate::hertz`]; a cell is empty where its value is undefined: no fit with fewer than three
+//!   closed nodes, no relative error without force), `hertz_profile.csv` — `r, p, p_hertz` of
+//!   the last increment;
 //! * `newton.png` (relative residual per iteration, log scale, the last eight increments),
 //!   `contact_force.png` (normal force of each pair against time), `hertz_pressure.png` (nodal
 //!   pressure against `r` with Hertz and the fitted profile) and `hertz_force_approach.png`
@@ -148,24 +150,39 @@ impl RunRecord {
         let Some(last) = samples.last() else {
             return Vec::new();
         };
+        if last.force.is_nan() || last.force <= 0.0 {
+            return vec![format!(
+                "hertz: no contact force at the last increment ({} closed nodes)",
+                last.profile.len()
+            )];
+        }
         let e = last.errors(&setup.theory);
-        let (fa, fp) = last.fit.unwrap_or((f64::NAN, f64::NAN));
-        let mut lines = vec![
-            format!(
-                "hertz: force {:.6e}, {} closed nodes; contact radius fit {fa:.5e} vs {:.5e} ({:+.2} %)",
+        let mut lines = match last.fit {
+            Some((fa, fp)) => vec![
+                format!(
+                    "hertz: force {:.6e}, {} closed nodes; contact radius fit {fa:.5e} vs {:.5e} ({:+.2} %)",
+                    last.force,
+                    last.profile.len(),
+                    e.radius,
+                    100.0 * e.fit_radius
+                ),
+                format!(
+                    "hertz: peak pressure fit {fp:.5e} vs {:.5e} ({:+.2} %), largest nodal {:.5e} ({:+.2} %)",
+                    e.peak,
+                    100.0 * e.fit_peak,
+                    last.max_pressure,
+                    100.0 * e.max_pressure
+                ),
+            ],
+            None => vec![format!(
+                "hertz: force {:.6e}, {} closed nodes: too few (or a rising profile) to fit; Hertz radius {:.5e}, peak pressure {:.5e}, largest nodal {:.5e}",
                 last.force,
                 last.profile.len(),
                 e.radius,
-                100.0 * e.fit_radius
-            ),
-            format!(
-                "hertz: peak pressure fit {fp:.5e} vs {:.5e} ({:+.2} %), largest nodal {:.5e} ({:+.2} %)",
                 e.peak,
-                100.0 * e.fit_peak,
-                last.max_pressure,
-                100.0 * e.max_pressure
-            ),
-        ];
+                last.max_pressure
+            )],
+        };
         if let Some((k, c)) = approach_fit(samples) {
             let kh = setup.theory.approach_coefficient();
             lines.push(format!(
@@ -251,6 +268,15 @@ fn approach_fit(samples: &[HertzSample]) -> Option<(f64, f64)> {
     fit_approach(&pts)
 }
 
+/// A CSV cell: the value, or empty where it is undefined (no fit, no force).
+fn cell(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:e}")
+    } else {
+        String::new()
+    }
+}
+
 fn hertz_table(setup: &HertzSetup, samples: &[HertzSample]) -> String {
     let mut csv = String::from(
         "step,increment,iterations,force,approach,closed_nodes,hertz_radius,fit_radius,radius_error,hertz_p0,fit_p0,p0_error,max_pressure,max_pressure_error\n",
@@ -258,21 +284,28 @@ fn hertz_table(setup: &HertzSetup, samples: &[HertzSample]) -> String {
     for s in samples {
         let e = s.errors(&setup.theory);
         let (fa, fp) = s.fit.unwrap_or((f64::NAN, f64::NAN));
+        let cells = [
+            s.force,
+            s.approach,
+            e.radius,
+            fa,
+            e.fit_radius,
+            e.peak,
+            fp,
+            e.fit_peak,
+            s.max_pressure,
+            e.max_pressure,
+        ]
+        .map(cell);
+        let [force, approach, rest @ ..] = &cells;
         let _ = writeln!(
             csv,
-            "{},{},{},{:e},{:e},{},{:e},{fa:e},{:e},{:e},{fp:e},{:e},{:e},{:e}",
+            "{},{},{},{force},{approach},{},{}",
             s.step + 1,
             s.increment,
             s.iterations,
-            s.force,
-            s.approach,
             s.profile.len(),
-            e.radius,
-            e.fit_radius,
-            e.peak,
-            e.fit_peak,
-            s.max_pressure,
-            e.max_pressure
+            rest.join(",")
         );
     }
     csv
@@ -426,4 +459,93 @@ pub fn compare_newton(dirs: &[PathBuf], pick: Option<(usize, usize)>, out: &Path
         legend_low: false,
     };
     chart(out, &axes, &series)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hertz::Hertz;
+
+    fn record(samples: Vec<HertzSample>) -> RunRecord {
+        let setup = HertzSetup {
+            theory: Hertz {
+                radius: 20.0,
+                modulus: 2.0e5,
+            },
+            force_column: "a-b_normal_force".into(),
+            centre: [0.0; 3],
+            axis: [0.0, 0.0, 1.0],
+            symmetry: 4.0,
+            loaded: Vec::new(),
+        };
+        RunRecord {
+            hertz: Some((setup, samples)),
+            ..RunRecord::default()
+        }
+    }
+
+    fn sample(force: f64, profile: Vec<(f64, f64)>) -> HertzSample {
+        HertzSample {
+            step: 0,
+            increment: 1,
+            iterations: 2,
+            force,
+            approach: 0.01,
+            fit: crate::hertz::fit_profile(&profile),
+            max_pressure: profile.iter().map(|p| p.1).fold(0.0, f64::max),
+            profile,
+        }
+    }
+
+    #[test]
+    fn undefined_values_are_said_and_left_empty_not_nan() {
+        let rec = record(vec![sample(0.0, Vec::new())]);
+        let lines = rec.hertz_summary();
+        assert_eq!(lines.len(), 1);
+        assert!(lines[0].contains("no contact force"), "{lines:?}");
+        let table = hertz_table(
+            &rec.hertz.as_ref().expect("hertz").0,
+            &rec.hertz.as_ref().expect("hertz").1,
+        );
+        assert!(
+            !table.to_lowercase().contains("nan") && !table.contains("inf"),
+            "{table}"
+        );
+        // Force but two nodes: no fit, the summary says so.
+        let rec = record(vec![sample(100.0, vec![(0.0, 50.0), (0.1, 40.0)])]);
+        let lines = rec.hertz_summary();
+        assert!(lines[0].contains("too few"), "{lines:?}");
+        assert!(!lines.concat().to_lowercase().contains("nan"));
+    }
+
+    #[test]
+    fn newton_table_round_trips() {
+        let dir = std::env::temp_dir().join(format!("tricontact-report-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let rec = RunRecord {
+            newton: vec![
+                NewtonLog {
+                    step: 0,
+                    increment: 1,
+                    relative: vec![1.0, 1e-3, 1e-9],
+                },
+                NewtonLog {
+                    step: 1,
+                    increment: 1,
+                    relative: vec![1.0, 2e-12],
+                },
+            ],
+            ..RunRecord::default()
+        };
+        rec.write_tables(&dir).expect("tables");
+        assert_eq!(read_newton(&dir).expect("read"), rec.newton);
+        std::fs::write(
+            dir.join("newton.csv"),
+            "step,increment,iteration,relative_residual\n1,x,0,1\n",
+        )
+        .expect("write");
+        let e = read_newton(&dir).expect_err("malformed").to_string();
+        assert!(e.contains("newton.csv:2"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
 }
