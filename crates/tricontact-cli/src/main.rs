@@ -10,6 +10,17 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+
+/// `println!` that ends the program quietly when standard output is closed (e.g. piped into
+/// `head`), instead of panicking: results are written atomically, so nothing is left half-written.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        if writeln!(std::io::stdout(), $($arg)*).is_err() {
+            std::process::exit(1);
+        }
+    }};
+}
 use indicatif::{ProgressBar, ProgressStyle};
 use tricontact_fem::analysis::Analysis;
 use tricontact_fem::contact::ContactTerms;
@@ -97,7 +108,7 @@ fn main() -> ExitCode {
             increment,
             output,
         } => report::compare_newton(&folders, increment, &output)
-            .map(|()| println!("wrote {}", output.display()))
+            .map(|()| say!("wrote {}", output.display()))
             .map_err(|e| e.to_string()),
     };
     match result {
@@ -122,18 +133,9 @@ fn set_threads(threads: Option<usize>) -> Result<(), String> {
 
 fn increment_line(info: &IncrementInfo<'_>) -> String {
     let rel: Vec<String> = info
-        .residuals
+        .relative_residuals()
         .iter()
-        .map(|r| {
-            format!(
-                "{:.1e}",
-                if info.reference > 0.0 {
-                    r / info.reference
-                } else {
-                    0.0
-                }
-            )
-        })
+        .map(|r| format!("{r:.1e}"))
         .collect();
     format!(
         "step {} '{}' inc {:>3}  t = {:.4}  iters {:>2}  cutbacks {}  {}  rel. residuals [{}]",
@@ -180,7 +182,7 @@ fn run(
     );
     for pair in &an.contacts {
         for line in &pair.report {
-            println!("{line}");
+            say!("{line}");
         }
     }
     let mut contact = ContactTerms::new(&an);
@@ -199,7 +201,7 @@ fn run(
             }
             for line in lines {
                 if pb.is_hidden() {
-                    println!("{line}");
+                    say!("{line}");
                 } else {
                     pb.println(line);
                 }
@@ -214,11 +216,11 @@ fn run(
         .into_iter()
         .chain(record.hertz_summary())
     {
-        println!("{line}");
+        say!("{line}");
     }
     if an.output.plots {
         let plots = record.write_plots(&dir)?;
-        println!(
+        say!(
             "plots: {}",
             plots
                 .iter()
@@ -227,7 +229,7 @@ fn run(
                 .join(", ")
         );
     }
-    println!(
+    say!(
         "done: {} increments, {} Newton iterations, {} cutbacks; results in {}",
         summary.increments,
         summary.iterations,
@@ -240,15 +242,15 @@ fn run(
 fn check(model_path: &Path) -> Result<(), FemError> {
     let model = Model::load(model_path)?;
     let mesh = gmsh::read_msh(&model.mesh_path())?;
-    println!("model: {}", model_path.display());
-    println!("mesh:  {}", model.mesh_path().display());
-    println!("nodes: {}", mesh.nodes.len());
+    say!("model: {}", model_path.display());
+    say!("mesh:  {}", model.mesh_path().display());
+    say!("nodes: {}", mesh.nodes.len());
     for (kind, n) in mesh.count_kinds() {
-        println!("elements {:<6} {n}", kind.name());
+        say!("elements {:<6} {n}", kind.name());
     }
-    println!("groups:");
+    say!("groups:");
     for g in &mesh.groups {
-        println!(
+        say!(
             "  {:<20} {}D  {:>8} elements {:>8} nodes",
             g.name,
             g.dim,
@@ -258,7 +260,7 @@ fn check(model_path: &Path) -> Result<(), FemError> {
     }
     let (an, mut problems) = Analysis::build(&model, mesh);
     let active = an.active_nodes.iter().filter(|&&a| a).count();
-    println!(
+    say!(
         "bodies: {} elements, {} active nodes, {} DOFs",
         an.body.len(),
         active,
@@ -271,7 +273,7 @@ fn check(model_path: &Path) -> Result<(), FemError> {
     }
     for pair in &an.contacts {
         let facets: usize = pair.passes.iter().map(|p| p.surface.len()).sum();
-        println!(
+        say!(
             "contact {}: {:?}, {} slave nodes, {} facets, {} pass(es), penalty {:.3e}, mean facet edge {:.3e}",
             pair.name,
             pair.method,
@@ -282,13 +284,13 @@ fn check(model_path: &Path) -> Result<(), FemError> {
             pair.facet_size
         );
         for line in &pair.report {
-            println!("  {line}");
+            say!("  {line}");
         }
     }
     for s in 0..an.steps.len() {
         let (mask, _) = driver::step_constraints(&an, s);
         let prescribed = mask.iter().filter(|&&m| m).count();
-        println!(
+        say!(
             "step {} '{}': {} prescribed DOFs, {} free DOFs, nlgeom = {}",
             s + 1,
             an.steps[s].name,
@@ -307,12 +309,12 @@ fn check(model_path: &Path) -> Result<(), FemError> {
         }
     }
     if problems.is_empty() {
-        println!("no problems found");
+        say!("no problems found");
         Ok(())
     } else {
-        println!("{} problem(s):", problems.len());
+        say!("{} problem(s):", problems.len());
         for p in &problems {
-            println!("  - {p}");
+            say!("  - {p}");
         }
         if problems.len() == 1 {
             Err(problems.remove(0))

@@ -340,3 +340,18 @@ fn hertz_table_errors_name_the_key() {
     }
     std::fs::remove_dir_all(&out).ok();
 }
+
+#[test]
+fn closed_stdout_ends_quietly_without_panic() {
+    let mut child = bin()
+        .args(["check".as_ref(), example().as_os_str()])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("spawns");
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("waits");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(out.status.code(), Some(1));
+}

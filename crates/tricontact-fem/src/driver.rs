@@ -63,6 +63,20 @@ pub struct IncrementInfo<'a> {
     pub history: &'a [(String, f64)],
 }
 
+impl IncrementInfo<'_> {
+    /// The residual norms divided by the reference norm of the convergence test (the norms
+    /// themselves when the reference is zero).
+    #[must_use]
+    pub fn relative_residuals(&self) -> Vec<f64> {
+        let scale = if self.reference > 0.0 {
+            self.reference
+        } else {
+            1.0
+        };
+        self.residuals.iter().map(|r| r / scale).collect()
+    }
+}
+
 /// Totals of a run.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RunSummary {

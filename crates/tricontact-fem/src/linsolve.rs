@@ -6,7 +6,10 @@
 //! definite: the saddle-point systems of contact multipliers, or past a limit point), the same
 //! symbolic structure is used for `K = L D Lᵀ` without pivoting, accepted only if the solution of
 //! `K x = K·1` has a small backward error (`‖K x − b‖ ≤ 10⁻¹⁰ (‖K‖_F ‖x‖ + ‖b‖)`); otherwise,
-//! and for unsymmetric systems, a sparse LU with partial pivoting is used. Multipliers are ordered
+//! and for unsymmetric systems, a sparse LU with partial pivoting is used. A rejected `LDLᵀ` is not
+//! tried again by the same solver (one per step): a body held only by contact makes the
+//! displacement block singular, and without pivoting every factorization then loses accuracy
+//! (the contact patch test: backward error 3·10⁻⁶). Multipliers are ordered
 //! after the displacements they constrain, so their `LDLᵀ` pivots are the (negative) Schur
 //! complements `−bᵀK⁻¹b` and no pivoting is needed. The symbolic analysis (fill-reducing
 //! ordering, elimination tree) is kept and reused while the pattern is
@@ -125,6 +128,8 @@ pub struct LinearSolver {
     order: Option<(Vec<usize>, Vec<usize>)>,
     /// A factorization kept for reuse while the tangent is constant.
     pub cached: Option<Factor>,
+    /// `LDLᵀ` was rejected once: go straight to LU from then on (kept by [`Self::reset`]).
+    ldlt_rejected: bool,
 }
 
 impl LinearSolver {
@@ -186,12 +191,13 @@ impl LinearSolver {
         a: SparseColMatRef<'_, usize, f64>,
         structure: Structure,
     ) -> Result<Factor, Singular> {
-        if structure == Structure::SymmetricIndefinite {
+        if structure == Structure::SymmetricIndefinite && !self.ldlt_rejected {
             self.analyze(a)?;
             let symbolic = self.llt.clone().expect("analysed");
             if let Some(f) = ldlt(&symbolic, a) {
                 return Ok(f);
             }
+            self.ldlt_rejected = true;
         }
         if structure == Structure::SymmetricDefinite {
             self.analyze(a)?;
@@ -214,8 +220,11 @@ impl LinearSolver {
             if ok {
                 return Ok(Factor::Llt(Cholesky { symbolic, values }));
             }
-            if let Some(f) = ldlt(&symbolic, a) {
-                return Ok(f);
+            if !self.ldlt_rejected {
+                if let Some(f) = ldlt(&symbolic, a) {
+                    return Ok(f);
+                }
+                self.ldlt_rejected = true;
             }
         }
         if self.lu.is_none() {

@@ -61,15 +61,10 @@ impl RunRecord {
 
     /// Records a converged increment.
     pub fn record(&mut self, an: &Analysis, info: &IncrementInfo<'_>) {
-        let scale = if info.reference > 0.0 {
-            info.reference
-        } else {
-            1.0
-        };
         self.newton.push(NewtonLog {
             step: info.step,
             increment: info.increment,
-            relative: info.residuals.iter().map(|r| r / scale).collect(),
+            relative: info.relative_residuals(),
         });
         let forces = info
             .history
