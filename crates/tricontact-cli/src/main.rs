@@ -65,6 +65,9 @@ enum Command {
     Check {
         /// Model file (TOML).
         model: PathBuf,
+        /// Mesh file to use instead of `[mesh] file` (relative to the current folder).
+        #[arg(long)]
+        mesh: Option<PathBuf>,
     },
     /// Overlay the Newton residuals of one increment of several result folders (PNG).
     Plot {
@@ -102,7 +105,7 @@ fn main() -> ExitCode {
             threads,
         } => set_threads(threads)
             .and_then(|()| run(&model, output, mesh, verbose).map_err(|e| e.to_string())),
-        Command::Check { model } => check(&model).map_err(|e| e.to_string()),
+        Command::Check { model, mesh } => check(&model, mesh).map_err(|e| e.to_string()),
         Command::Plot {
             folders,
             increment,
@@ -156,11 +159,7 @@ fn run(
     mesh_override: Option<PathBuf>,
     verbose: bool,
 ) -> Result<(), FemError> {
-    let mut model = Model::load(model_path)?;
-    if let Some(m) = mesh_override {
-        let cwd = std::env::current_dir().map_err(|e| FemError::io(".", e))?;
-        model.mesh.file = cwd.join(m);
-    }
+    let model = load_model(model_path, mesh_override)?;
     let mesh = gmsh::read_msh(&model.mesh_path())?;
     let an = Analysis::new(&model, mesh)?;
     let hertz = model
@@ -239,8 +238,18 @@ fn run(
     Ok(())
 }
 
-fn check(model_path: &Path) -> Result<(), FemError> {
-    let model = Model::load(model_path)?;
+/// The model file, with `--mesh` (relative to the current folder) instead of its `[mesh] file`.
+fn load_model(model_path: &Path, mesh_override: Option<PathBuf>) -> Result<Model, FemError> {
+    let mut model = Model::load(model_path)?;
+    if let Some(m) = mesh_override {
+        let cwd = std::env::current_dir().map_err(|e| FemError::io(".", e))?;
+        model.mesh.file = cwd.join(m);
+    }
+    Ok(model)
+}
+
+fn check(model_path: &Path, mesh_override: Option<PathBuf>) -> Result<(), FemError> {
+    let model = load_model(model_path, mesh_override)?;
     let mesh = gmsh::read_msh(&model.mesh_path())?;
     say!("model: {}", model_path.display());
     say!("mesh:  {}", model.mesh_path().display());
