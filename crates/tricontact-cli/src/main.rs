@@ -194,7 +194,18 @@ fn run(
         pb.set_position((info.time * 1000.0).round() as u64);
         pb.set_message(format!("step {} t={:.3}", info.step + 1, info.load_factor));
         if verbose {
-            let mut lines = vec![increment_line(info)];
+            let mut lines: Vec<String> = info
+                .attempts
+                .iter()
+                .map(|(t, why)| {
+                    format!(
+                        "step {} '{}' attempt t = {t:.4} cut back: {why}",
+                        info.step + 1,
+                        info.step_name
+                    )
+                })
+                .collect();
+            lines.push(increment_line(info));
             for (k, note) in info.notes.iter().enumerate() {
                 lines.push(format!("    iteration {k}: {note}"));
             }

@@ -355,3 +355,48 @@ fn closed_stdout_ends_quietly_without_panic() {
     assert!(!stderr.contains("panicked"), "{stderr}");
     assert_eq!(out.status.code(), Some(1));
 }
+
+#[test]
+fn verbose_log_names_each_cut_back_attempt() {
+    // The sliding example with a penalty needs cutbacks (VERIFICATION.md): each failed attempt is
+    // reported with its target load factor and reason before the increment that converged.
+    let out = temp_dir("cutbacks");
+    let ex = examples_dir().join("sliding");
+    let text = std::fs::read_to_string(ex.join("model.toml")).expect("model");
+    let text = text
+        .replace("method = \"multiplier\"", "method = \"penalty\"")
+        .replace(
+            "file = \"sliding.msh\"",
+            &format!(
+                "file = {:?}",
+                ex.join("sliding.msh").to_str().expect("utf8")
+            ),
+        )
+        .replace("plots = true", "plots = false");
+    let model = out.join("penalty.toml");
+    std::fs::write(&model, text).expect("write");
+    let stdout = run_ok(&[
+        "run".as_ref(),
+        model.as_os_str(),
+        "--verbose".as_ref(),
+        "--output".as_ref(),
+        out.join("results").as_os_str(),
+    ]);
+    let attempts: Vec<&str> = stdout.lines().filter(|l| l.contains("cut back:")).collect();
+    assert!(!attempts.is_empty(), "{stdout}");
+    assert!(
+        attempts.iter().all(|l| l.contains("attempt t = ")
+            && (l.contains("inverted") || l.contains("no convergence"))),
+        "{attempts:?}"
+    );
+    let done = stdout
+        .lines()
+        .find(|l| l.starts_with("done:"))
+        .expect("summary");
+    assert!(
+        done.contains(&format!("{} cutbacks", attempts.len())),
+        "{done} vs {}",
+        attempts.len()
+    );
+    std::fs::remove_dir_all(&out).ok();
+}

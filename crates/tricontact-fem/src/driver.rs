@@ -61,6 +61,8 @@ pub struct IncrementInfo<'a> {
     pub point_fields: &'a [(String, usize, Vec<f64>)],
     /// Extra history columns at the committed state.
     pub history: &'a [(String, f64)],
+    /// The attempts cut back before this increment converged: target load factor and why.
+    pub attempts: &'a [(f64, String)],
 }
 
 impl IncrementInfo<'_> {
@@ -257,6 +259,7 @@ pub fn run(
         let mut control = IncrementControl::new(step.increments, step.max_cutbacks);
         let mut t = 0.0;
         let mut increment = 0;
+        let mut attempts: Vec<(f64, String)> = Vec::new();
         while t < 1.0 - 1e-12 {
             let t_new = control.target(t);
             let mut fext = external_forces(an, n_dofs, s, t_new);
@@ -309,7 +312,9 @@ pub fn run(
                         notes: &c.notes,
                         point_fields: &point_fields,
                         history: &history,
+                        attempts: &attempts,
                     })?;
+                    attempts.clear();
                     control.converged();
                 }
                 Err(failure) => {
@@ -318,6 +323,7 @@ pub fn run(
                         return Err(FemError::Singular(format!("step '{}': {m}", step.name)));
                     }
                     summary.cutbacks += 1;
+                    attempts.push((t_new, failure.to_string()));
                     if !control.failed() {
                         return Err(FemError::NotConverged {
                             step: step.name.clone(),
