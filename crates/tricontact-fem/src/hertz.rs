@@ -12,7 +12,7 @@
 //!
 //! Measurement at a converged increment:
 //! * `F` = `symmetry` × the pair's normal force (`Σ −λ`; a quarter model has `symmetry = 4`);
-//! * the profile is `(r, p)` over the closed slave nodes: `r` the distance of the deformed node
+//! * the profile is `(r, p)` over the pair's closed slave nodes: `r` the distance of the deformed node
 //!   from the axis through `centre`, `p` the nodal `contact_pressure` (force over lumped area);
 //! * the fitted profile: `p² = p0² − (p0²/a²) r²` is linear in `r²`, so a linear least-squares fit
 //!   `p² ≈ c₀ + c₁ r²` gives `p0 = √c₀` and `a = √(−c₀/c₁)` — the contact radius and peak
@@ -129,6 +129,8 @@ pub struct HertzSetup {
     pub symmetry: f64,
     /// Nodes of the loaded group.
     pub loaded: Vec<usize>,
+    /// Slave nodes of the pair (first pass): the nodes of the pressure profile.
+    pub slaves: Vec<usize>,
 }
 
 fn invalid(message: String) -> FemError {
@@ -190,6 +192,7 @@ impl HertzSetup {
             axis: def.axis.map(|x| x / norm),
             symmetry: def.symmetry as f64,
             loaded: group.nodes.clone(),
+            slaves: pair.passes[0].slaves.clone(),
         })
     }
 
@@ -211,8 +214,9 @@ impl HertzSetup {
         let mut profile = Vec::new();
         if let (Some(status), Some(pressure)) = (field("contact_status"), field("contact_pressure"))
         {
-            for (a, node) in an.mesh.nodes.iter().enumerate() {
+            for &a in &self.slaves {
                 if status[a] > 0.5 {
+                    let node = an.mesh.nodes[a];
                     let x: [f64; 3] = std::array::from_fn(|i| node[i] + info.u[3 * a + i]);
                     profile.push((self.radial_distance(x), pressure[a]));
                 }

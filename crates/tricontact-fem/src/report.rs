@@ -472,6 +472,7 @@ mod tests {
             axis: [0.0, 0.0, 1.0],
             symmetry: 4.0,
             loaded: Vec::new(),
+            slaves: Vec::new(),
         };
         RunRecord {
             hertz: Some((setup, samples)),
