@@ -52,25 +52,25 @@ impl Factor {
     pub fn solve(&self, b: &[f64]) -> Vec<f64> {
         let mut rhs = faer::Mat::<f64>::from_fn(b.len(), 1, |i, _| b[i]);
         match self {
-            Self::Llt(f) => {
+            Self::Llt(f) | Self::Ldlt(f) => {
                 let par = faer::get_global_parallelism();
                 let mut mem = MemBuffer::new(f.symbolic.solve_in_place_scratch::<f64>(1, par));
-                LltRef::new(&f.symbolic, &f.values).solve_in_place_with_conj(
-                    Conj::No,
-                    rhs.as_mut(),
-                    par,
-                    MemStack::new(&mut mem),
-                );
-            }
-            Self::Ldlt(f) => {
-                let par = faer::get_global_parallelism();
-                let mut mem = MemBuffer::new(f.symbolic.solve_in_place_scratch::<f64>(1, par));
-                LdltRef::new(&f.symbolic, &f.values).solve_in_place_with_conj(
-                    Conj::No,
-                    rhs.as_mut(),
-                    par,
-                    MemStack::new(&mut mem),
-                );
+                let (rhs, stack) = (rhs.as_mut(), MemStack::new(&mut mem));
+                if matches!(self, Self::Llt(_)) {
+                    LltRef::new(&f.symbolic, &f.values).solve_in_place_with_conj(
+                        Conj::No,
+                        rhs,
+                        par,
+                        stack,
+                    );
+                } else {
+                    LdltRef::new(&f.symbolic, &f.values).solve_in_place_with_conj(
+                        Conj::No,
+                        rhs,
+                        par,
+                        stack,
+                    );
+                }
             }
             Self::Lu(f) => f.solve_in_place(rhs.as_mut()),
         }
@@ -191,34 +191,13 @@ impl LinearSolver {
         a: SparseColMatRef<'_, usize, f64>,
         structure: Structure,
     ) -> Result<Factor, Singular> {
-        if structure == Structure::SymmetricIndefinite && !self.ldlt_rejected {
+        if structure != Structure::Unsymmetric {
             self.analyze(a)?;
             let symbolic = self.llt.clone().expect("analysed");
-            if let Some(f) = ldlt(&symbolic, a) {
+            if structure == Structure::SymmetricDefinite
+                && let Some(f) = llt(&symbolic, a)?
+            {
                 return Ok(f);
-            }
-            self.ldlt_rejected = true;
-        }
-        if structure == Structure::SymmetricDefinite {
-            self.analyze(a)?;
-            let symbolic = self.llt.clone().expect("analysed");
-            let par = faer::get_global_parallelism();
-            let mut values = vec![0.0; symbolic.len_val()];
-            let req = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
-            let mut mem = MemBuffer::try_new(req).map_err(|_| Singular("out of memory".into()))?;
-            let ok = symbolic
-                .factorize_numeric_llt::<f64>(
-                    &mut values,
-                    a,
-                    Side::Lower,
-                    Default::default(),
-                    par,
-                    MemStack::new(&mut mem),
-                    Default::default(),
-                )
-                .is_ok();
-            if ok {
-                return Ok(Factor::Llt(Cholesky { symbolic, values }));
             }
             if !self.ldlt_rejected {
                 if let Some(f) = ldlt(&symbolic, a) {
@@ -236,6 +215,34 @@ impl LinearSolver {
             .map(|f| Factor::Lu(Box::new(f)))
             .map_err(|e| Singular(format!("LU factorization failed ({e:?})")))
     }
+}
+
+/// `L Lᵀ` of `a`, `None` when `a` is not positive definite.
+fn llt(
+    symbolic: &Arc<SymbolicCholesky<usize>>,
+    a: SparseColMatRef<'_, usize, f64>,
+) -> Result<Option<Factor>, Singular> {
+    let par = faer::get_global_parallelism();
+    let mut values = vec![0.0; symbolic.len_val()];
+    let req = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
+    let mut mem = MemBuffer::try_new(req).map_err(|_| Singular("out of memory".into()))?;
+    let ok = symbolic
+        .factorize_numeric_llt::<f64>(
+            &mut values,
+            a,
+            Side::Lower,
+            Default::default(),
+            par,
+            MemStack::new(&mut mem),
+            Default::default(),
+        )
+        .is_ok();
+    Ok(ok.then(|| {
+        Factor::Llt(Cholesky {
+            symbolic: symbolic.clone(),
+            values,
+        })
+    }))
 }
 
 /// `L D Lᵀ` of `a` on the Cholesky structure, if it exists and solves `a x = a·1` accurately.
