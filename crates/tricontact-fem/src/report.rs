@@ -197,14 +197,7 @@ impl RunRecord {
         let path = dir.join("newton.png");
         let start = self.newton.len().saturating_sub(8);
         let series: Vec<Series> = self.newton[start..].iter().map(newton_series).collect();
-        let axes = Axes {
-            title: "Newton convergence",
-            x: "iteration",
-            y: "relative residual",
-            log_y: true,
-            legend_low: false,
-        };
-        chart(&path, &axes, &series)?;
+        chart(&path, &newton_axes(), &series)?;
         written.push(path);
         if self.forces.iter().any(|(_, f)| !f.is_empty()) {
             let path = dir.join("contact_force.png");
@@ -235,6 +228,16 @@ impl RunRecord {
                 Series::line(name.trim_end_matches("_normal_force"), pts)
             })
             .collect()
+    }
+}
+
+fn newton_axes() -> Axes<'static> {
+    Axes {
+        title: "Newton convergence",
+        x: "iteration",
+        y: "relative residual",
+        log_y: true,
+        legend_low: false,
     }
 }
 
@@ -446,14 +449,7 @@ pub fn compare_newton(dirs: &[PathBuf], pick: Option<(usize, usize)>, out: &Path
         s.label = format!("{name} (step {} inc {})", log.step + 1, log.increment);
         series.push(s);
     }
-    let axes = Axes {
-        title: "Newton convergence",
-        x: "iteration",
-        y: "relative residual",
-        log_y: true,
-        legend_low: false,
-    };
-    chart(out, &axes, &series)
+    chart(out, &newton_axes(), &series)
 }
 
 #[cfg(test)]

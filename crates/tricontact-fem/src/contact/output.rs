@@ -17,6 +17,13 @@
 use super::ContactTerms;
 
 impl ContactTerms {
+    /// `|contact force| / A` of node `a` at the committed state; `None` for a node without area.
+    fn pressure(&self, a: usize) -> Option<f64> {
+        let f = &self.committed_force[3 * a..3 * a + 3];
+        let m = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
+        (self.areas[a] > 0.0).then(|| m / self.areas[a])
+    }
+
     /// The point fields at the committed state.
     #[must_use]
     pub fn fields(&self) -> Vec<(String, usize, Vec<f64>)> {
@@ -41,12 +48,8 @@ impl ContactTerms {
                 }
             }
         }
-        for a in 0..n {
-            let f = &self.committed_force[3 * a..3 * a + 3];
-            let m = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
-            if self.areas[a] > 0.0 {
-                pressure[a] = m / self.areas[a];
-            }
+        for (a, p) in pressure.iter_mut().enumerate() {
+            *p = self.pressure(a).unwrap_or(0.0);
         }
         vec![
             ("contact_force".into(), 3, self.committed_force.clone()),
@@ -71,11 +74,7 @@ impl ContactTerms {
                         active += 1;
                         pen = pen.max(-st.gap);
                         area += pass.areas[j];
-                        let s = pass.slaves[j];
-                        if self.areas[s] > 0.0 {
-                            let f = &self.committed_force[3 * s..3 * s + 3];
-                            let p =
-                                (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt() / self.areas[s];
+                        if let Some(p) = self.pressure(pass.slaves[j]) {
                             p_min = p_min.min(p);
                             p_max = p_max.max(p);
                         }
