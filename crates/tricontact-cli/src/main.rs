@@ -159,7 +159,7 @@ fn run(
     mesh_override: Option<PathBuf>,
     verbose: bool,
 ) -> Result<(), FemError> {
-    let model = load_model(model_path, mesh_override)?;
+    let model = Model::load_with_mesh(model_path, mesh_override.as_deref())?;
     let mesh = gmsh::read_msh(&model.mesh_path())?;
     let an = Analysis::new(&model, mesh)?;
     let hertz = model
@@ -249,18 +249,8 @@ fn run(
     Ok(())
 }
 
-/// The model file, with `--mesh` (relative to the current folder) instead of its `[mesh] file`.
-fn load_model(model_path: &Path, mesh_override: Option<PathBuf>) -> Result<Model, FemError> {
-    let mut model = Model::load(model_path)?;
-    if let Some(m) = mesh_override {
-        let cwd = std::env::current_dir().map_err(|e| FemError::io(".", e))?;
-        model.mesh.file = cwd.join(m);
-    }
-    Ok(model)
-}
-
 fn check(model_path: &Path, mesh_override: Option<PathBuf>) -> Result<(), FemError> {
-    let model = load_model(model_path, mesh_override)?;
+    let model = Model::load_with_mesh(model_path, mesh_override.as_deref())?;
     let mesh = gmsh::read_msh(&model.mesh_path())?;
     say!("model: {}", model_path.display());
     say!("mesh:  {}", model.mesh_path().display());

@@ -318,6 +318,11 @@ fn hertz_table_errors_name_the_key() {
             "contact = \"a-b\"\nsymmetry = 4 ",
             "[hertz] contact: no pair 'a-b' (pairs: contact-flat)",
         ),
+        (
+            "[[step]]",
+            "[[contact]]\nslave = \"contact\"\nmaster = \"flat\"\nmethod = \"penalty\"\n\n[[step]]",
+            "[hertz] contact: name the pair, the model has 2",
+        ),
     ] {
         assert!(base.contains(from), "{from}");
         let model = out.join("bad.toml");
@@ -337,6 +342,24 @@ fn hertz_table_errors_name_the_key() {
                 "{cmd}: {text}"
             );
         }
+    }
+    // A missing `--mesh` file is named.
+    let missing = out.join("missing.msh");
+    for cmd in ["check", "run"] {
+        let o = bin()
+            .args([
+                cmd.as_ref(),
+                ex.join("multiplier.toml").as_os_str(),
+                "--mesh".as_ref(),
+                missing.as_os_str(),
+            ])
+            .output()
+            .expect("runs");
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && stderr.contains("missing.msh"),
+            "{cmd}: {stderr}"
+        );
     }
     std::fs::remove_dir_all(&out).ok();
 }

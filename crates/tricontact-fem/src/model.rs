@@ -323,6 +323,19 @@ impl Model {
         Ok(model)
     }
 
+    /// Reads a model file and, when `mesh` is given, uses that mesh instead of `[mesh] file`
+    /// (`mesh` relative to the current folder, as on a command line).
+    ///
+    /// # Errors
+    /// As [`Model::load`]; the current folder cannot be read.
+    pub fn load_with_mesh(path: &Path, mesh: Option<&Path>) -> Result<Self> {
+        let mut model = Self::load(path)?;
+        if let Some(m) = mesh {
+            model.mesh.file = std::path::absolute(m).map_err(|e| FemError::io(m, e))?;
+        }
+        Ok(model)
+    }
+
     /// Parses model text (`path` only for messages).
     ///
     /// # Errors

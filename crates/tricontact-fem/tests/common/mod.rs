@@ -141,10 +141,8 @@ pub fn run_example(
     let folder = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../examples")
         .join(dir);
-    let mut m = Model::load(&folder.join(model)).expect("example model");
-    if let Some(mesh) = mesh {
-        m.mesh.file = folder.join(mesh);
-    }
+    let mesh = mesh.map(|f| folder.join(f));
+    let m = Model::load_with_mesh(&folder.join(model), mesh.as_deref()).expect("example model");
     let mesh = tricontact_fem::gmsh::read_msh(&m.mesh_path()).expect("example mesh");
     let an = Analysis::new(&m, mesh).expect("example analysis");
     let hertz = m
