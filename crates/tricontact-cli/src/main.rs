@@ -10,6 +10,15 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use tricontact_fem::analysis::Analysis;
+use tricontact_fem::contact::ContactTerms;
+use tricontact_fem::driver::{self, IncrementInfo};
+use tricontact_fem::hertz::HertzSetup;
+use tricontact_fem::model::Model;
+use tricontact_fem::output::ResultWriter;
+use tricontact_fem::report::{self, RunRecord};
+use tricontact_fem::{FemError, gmsh, rigid};
 
 /// `println!` that ends the program quietly when standard output is closed (e.g. piped into
 /// `head`), instead of panicking: results are written atomically, so nothing is left half-written.
@@ -21,15 +30,6 @@ macro_rules! say {
         }
     }};
 }
-use indicatif::{ProgressBar, ProgressStyle};
-use tricontact_fem::analysis::Analysis;
-use tricontact_fem::contact::ContactTerms;
-use tricontact_fem::driver::{self, IncrementInfo};
-use tricontact_fem::hertz::HertzSetup;
-use tricontact_fem::model::Model;
-use tricontact_fem::output::ResultWriter;
-use tricontact_fem::report::{self, RunRecord};
-use tricontact_fem::{FemError, gmsh, rigid};
 
 #[derive(Parser)]
 #[command(
