@@ -57,7 +57,7 @@ fn run_writes_vtu_pvd_and_history() {
             .expect("entry")
             .path()
             .to_string_lossy()
-            .ends_with(".tmp"))
+            .contains(".tmp"))
     );
 }
 

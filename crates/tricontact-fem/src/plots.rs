@@ -4,7 +4,7 @@
 //! [`Series`] drawn as lines or as points. A logarithmic y axis is drawn as `log₁₀ y` with tick
 //! labels `1e<k>`, so all charts share one coordinate type. Text uses the DejaVu Sans font
 //! embedded in the crate (`assets/`, Bitstream Vera licence), so plotting needs no system fonts.
-//! Files are written to a temporary name and renamed, like every other result file.
+//! Files are written atomically ([`write_atomic_with`]), like every other result file.
 
 use std::path::Path;
 use std::sync::Once;
@@ -12,6 +12,7 @@ use std::sync::Once;
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 
+use crate::atomic::write_atomic_with;
 use crate::error::{FemError, Result};
 
 static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
@@ -150,9 +151,8 @@ pub fn chart(path: &Path, axes: &Axes<'_>, series: &[Series]) -> Result<()> {
         .collect();
     let (x0, x1) = range(data.iter().flatten().map(|p| p.0), false);
     let (y0, y1) = range(data.iter().flatten().map(|p| p.1), axes.log_y);
-    let tmp = path.with_extension("tmp.png");
-    {
-        let root = BitMapBackend::new(&tmp, (900, 600)).into_drawing_area();
+    write_atomic_with(path, |tmp| {
+        let root = BitMapBackend::new(tmp, (900, 600)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| plot_error(path, e))?;
         let mut chart = ChartBuilder::on(&root)
             .caption(axes.title, ("sans-serif", 24))
@@ -200,9 +200,8 @@ pub fn chart(path: &Path, axes: &Axes<'_>, series: &[Series]) -> Result<()> {
             })
             .draw()
             .map_err(|e| plot_error(path, e))?;
-        root.present().map_err(|e| plot_error(path, e))?;
-    }
-    std::fs::rename(&tmp, path).map_err(|e| FemError::io(path, e))
+        root.present().map_err(|e| plot_error(path, e))
+    })
 }
 
 #[cfg(test)]
@@ -231,7 +230,7 @@ mod tests {
         chart(&path, &axes, &series).expect("chart");
         let bytes = std::fs::read(&path).expect("png written");
         assert_eq!(&bytes[1..4], b"PNG");
-        assert!(!path.with_extension("tmp.png").exists());
+        assert!(!dir.join("chart.tmp.png").exists());
         std::fs::remove_dir_all(&dir).ok();
     }
 
