@@ -6,9 +6,14 @@
 //! and finally `|p − (a N_a + b N_b + c N_c)|²`. The scalar kernel picks the first Voronoi region
 //! whose test holds (vertices, then edges, then the face); here every lane computes every
 //! candidate and selects by the same priority, without branches, so the four facets are evaluated
-//! together and the results are bit for bit those of the scalar kernel: the tree compares exactly
-//! the numbers the brute-force search compares. A lane whose selected coordinates are not finite
-//! (extreme coordinates, where the scalar kernel rescales) is recomputed with the scalar kernel.
+//! together, one `wide::f64x4` per quantity (an AVX register where the target has AVX; measured
+//! 1.5–1.7× faster than the same code on `[f64; 4]` arrays, which the compiler left scalar). The
+//! results are bit for bit those of the scalar kernel (no fused multiply–add on either side): the
+//! tree compares exactly the numbers the brute-force search compares. A lane whose selected
+//! coordinates are not finite (extreme coordinates, where the scalar kernel rescales) is
+//! recomputed with the scalar kernel.
+
+use wide::f64x4;
 
 use crate::closest::distance_squared_to_triangle;
 use crate::linalg::Vec3;
@@ -18,32 +23,26 @@ pub(crate) const LANES: usize = 4;
 
 type L = [f64; LANES];
 
-/// Lane-wise `f(x[k], y[k])`.
-#[inline(always)]
-fn map2(x: &L, y: &L, f: impl Fn(f64, f64) -> f64) -> L {
-    std::array::from_fn(|k| f(x[k], y[k]))
-}
+/// One coordinate of four facets.
+type V = f64x4;
 
 /// Lane-wise dot product, summed as nalgebra sums a 3-vector dot: `(x·x + y·y) + z·z`.
 #[inline(always)]
-fn dot(u: &[L; 3], v: &[L; 3]) -> L {
-    std::array::from_fn(|k| u[0][k] * v[0][k] + u[1][k] * v[1][k] + u[2][k] * v[2][k])
+fn dot(u: &[V; 3], v: &[V; 3]) -> V {
+    u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
 }
 
 /// Lane-wise `u − v`.
 #[inline(always)]
-fn sub(u: &[L; 3], v: &[L; 3]) -> [L; 3] {
-    std::array::from_fn(|d| map2(&u[d], &v[d], |x, y| x - y))
+fn sub(u: &[V; 3], v: &[V; 3]) -> [V; 3] {
+    [u[0] - v[0], u[1] - v[1], u[2] - v[2]]
 }
 
-/// Where `mask[k]`, takes `value[k]` into `into[k]` (bitwise, so the compiler needs no branch).
+/// Where `mask` is set, takes `value` into `n` (a bitwise select, no branch).
 #[inline(always)]
-fn select(into: &mut [L; 3], mask: &[bool; LANES], value: [L; 3]) {
-    let m: [u64; LANES] = std::array::from_fn(|k| 0u64.wrapping_sub(u64::from(mask[k])));
-    for (dst, src) in into.iter_mut().zip(value) {
-        *dst = std::array::from_fn(|k| {
-            f64::from_bits((src[k].to_bits() & m[k]) | (dst[k].to_bits() & !m[k]))
-        });
+fn select(n: &mut [V; 3], mask: V, value: [V; 3]) {
+    for (dst, src) in n.iter_mut().zip(value) {
+        *dst = mask.select(src, *dst);
     }
 }
 
@@ -54,51 +53,48 @@ pub(crate) fn distances_squared(corners: &[[Vec3; 3]], p: &Vec3) -> L {
     debug_assert!((1..=LANES).contains(&corners.len()));
     let last = corners.len() - 1;
     let padded: [&[Vec3; 3]; LANES] = std::array::from_fn(|k| &corners[k.min(last)]);
-    let corner =
-        |v: usize| -> [L; 3] { std::array::from_fn(|d| std::array::from_fn(|k| padded[k][v][d])) };
+    let corner = |v: usize| -> [V; 3] {
+        std::array::from_fn(|d| V::new(std::array::from_fn(|k| padded[k][v][d])))
+    };
     let (a, b, c) = (corner(0), corner(1), corner(2));
-    let pl: [L; 3] = std::array::from_fn(|d| [p[d]; LANES]);
+    let pl: [V; 3] = std::array::from_fn(|d| V::splat(p[d]));
     let (ab, ac, ap) = (sub(&b, &a), sub(&c, &a), sub(&pl, &a));
     let (bp, cp) = (sub(&ap, &ab), sub(&ap, &ac));
     let (d1, d2) = (dot(&ab, &ap), dot(&ac, &ap));
     let (d3, d4) = (dot(&ab, &bp), dot(&ac, &bp));
     let (d5, d6) = (dot(&ab, &cp), dot(&ac, &cp));
-    let vc: L = std::array::from_fn(|k| d1[k] * d4[k] - d3[k] * d2[k]);
-    let va: L = std::array::from_fn(|k| d3[k] * d6[k] - d5[k] * d4[k]);
-    let vb: L = std::array::from_fn(|k| d5[k] * d2[k] - d1[k] * d6[k]);
+    let vc = d1 * d4 - d3 * d2;
+    let va = d3 * d6 - d5 * d4;
+    let vb = d5 * d2 - d1 * d6;
     // The face, then each region of higher priority overrides it where its test holds.
-    let inv: L = std::array::from_fn(|k| 1.0 / (va[k] + vb[k] + vc[k]));
-    let mut n: [L; 3] = [
-        map2(&va, &inv, |x, y| x * y),
-        map2(&vb, &inv, |x, y| x * y),
-        map2(&vc, &inv, |x, y| x * y),
-    ];
-    let zero = [0.0; LANES];
-    let one = [1.0; LANES];
-    let t2: L = std::array::from_fn(|k| d2[k] / (d2[k] - d6[k]));
-    let e2 = std::array::from_fn(|k| vb[k] <= 0.0 && d2[k] >= 0.0 && d6[k] <= 0.0);
-    select(&mut n, &e2, [map2(&one, &t2, |x, y| x - y), zero, t2]);
-    let t1: L = std::array::from_fn(|k| (d4[k] - d3[k]) / ((d4[k] - d3[k]) + (d5[k] - d6[k])));
-    let e1 = std::array::from_fn(|k| va[k] <= 0.0 && d4[k] >= d3[k] && d5[k] >= d6[k]);
-    select(&mut n, &e1, [zero, map2(&one, &t1, |x, y| x - y), t1]);
-    let t0: L = std::array::from_fn(|k| d1[k] / (d1[k] - d3[k]));
-    let e0 = std::array::from_fn(|k| vc[k] <= 0.0 && d1[k] >= 0.0 && d3[k] <= 0.0);
-    select(&mut n, &e0, [map2(&one, &t0, |x, y| x - y), t0, zero]);
-    let v2 = std::array::from_fn(|k| d6[k] >= 0.0 && d5[k] <= d6[k]);
-    select(&mut n, &v2, [zero, zero, one]);
-    let v1 = std::array::from_fn(|k| d3[k] >= 0.0 && d4[k] <= d3[k]);
-    select(&mut n, &v1, [zero, one, zero]);
-    let v0 = std::array::from_fn(|k| d1[k] <= 0.0 && d2[k] <= 0.0);
-    select(&mut n, &v0, [one, zero, zero]);
+    let (zero, one) = (V::ZERO, V::ONE);
+    let inv = one / (va + vb + vc);
+    let mut n = [va * inv, vb * inv, vc * inv];
+    let t2 = d2 / (d2 - d6);
+    let e2 = vb.simd_le(zero) & d2.simd_ge(zero) & d6.simd_le(zero);
+    select(&mut n, e2, [one - t2, zero, t2]);
+    let t1 = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    let e1 = va.simd_le(zero) & d4.simd_ge(d3) & d5.simd_ge(d6);
+    select(&mut n, e1, [zero, one - t1, t1]);
+    let t0 = d1 / (d1 - d3);
+    let e0 = vc.simd_le(zero) & d1.simd_ge(zero) & d3.simd_le(zero);
+    select(&mut n, e0, [one - t0, t0, zero]);
+    select(&mut n, d6.simd_ge(zero) & d5.simd_le(d6), [zero, zero, one]);
+    select(&mut n, d3.simd_ge(zero) & d4.simd_le(d3), [zero, one, zero]);
+    select(
+        &mut n,
+        d1.simd_le(zero) & d2.simd_le(zero),
+        [one, zero, zero],
+    );
     // |p − (a N_a + b N_b + c N_c)|², summed as nalgebra sums it.
-    let diff: [L; 3] = std::array::from_fn(|d| {
-        std::array::from_fn(|k| p[d] - (a[d][k] * n[0][k] + b[d][k] * n[1][k] + c[d][k] * n[2][k]))
-    });
-    let mut out = dot(&diff, &diff);
-    for k in 0..=last {
-        if !(n[0][k].is_finite() && n[1][k].is_finite() && n[2][k].is_finite()) {
-            let [a, b, c] = &corners[k];
-            out[k] = distance_squared_to_triangle(a, b, c, p);
+    let diff: [V; 3] = std::array::from_fn(|d| pl[d] - (a[d] * n[0] + b[d] * n[1] + c[d] * n[2]));
+    let mut out = dot(&diff, &diff).to_array();
+    let bad = (!(n[0].is_finite() & n[1].is_finite() & n[2].is_finite())).to_bitmask();
+    if bad != 0 {
+        for (k, [a, b, c]) in corners.iter().enumerate() {
+            if bad & (1 << k) != 0 {
+                out[k] = distance_squared_to_triangle(a, b, c, p);
+            }
         }
     }
     out

@@ -6,9 +6,11 @@
 //! the empty leaf with an empty box (`+∞ … −∞`), whose distance is `+∞`, so it is never visited.
 //!
 //! The squared distances from a point to the four boxes,
-//! `Σ_axis max(lo − x, x − hi, 0)²`, are computed lane by lane over `[f32; 4]` arrays widened to
-//! `f64`, so the compiler can evaluate the four boxes together; rounding the boxes outwards keeps
+//! `Σ_axis max(lo − x, x − hi, 0)²`, are computed for the four boxes together in one
+//! `wide::f64x4` per quantity, the `f32` bounds widened to `f64`; rounding the boxes outwards keeps
 //! every distance a lower bound of the true one.
+
+use wide::f64x4;
 
 use crate::linalg::Vec3;
 use crate::search::aabb::Aabb;
@@ -60,36 +62,28 @@ impl Node {
     /// Squared distances from `p` to the four child boxes (zero inside, `+∞` for empty slots).
     #[inline]
     pub(crate) fn child_distances_squared(&self, p: &Vec3) -> [f64; WIDTH] {
-        let mut d = [0.0f64; WIDTH];
-        for axis in 0..3 {
-            let x = p[axis];
-            let (lo, hi) = (&self.lo[axis], &self.hi[axis]);
-            for ((dk, &l), &h) in d.iter_mut().zip(lo).zip(hi) {
-                let below = f64::from(l) - x;
-                let above = x - f64::from(h);
-                let g = if below > above { below } else { above };
-                let g = if g > 0.0 { g } else { 0.0 };
-                *dk += g * g;
-            }
-        }
-        d
+        self.distances_squared(p, p).to_array()
     }
 
     /// Squared distances from the box `b` to the four child boxes (zero where they overlap, `+∞`
     /// for empty slots): a lower bound of the squared distance from any point of `b`.
     #[inline]
     pub(crate) fn child_distances_squared_to_box(&self, b: &Aabb) -> [f64; WIDTH] {
-        let mut d = [0.0f64; WIDTH];
+        self.distances_squared(&b.min, &b.max).to_array()
+    }
+
+    /// `Σ_axis max(lo − high, low − hi, 0)²` for the box `[low, high]` (a point when equal).
+    #[inline(always)]
+    fn distances_squared(&self, low: &Vec3, high: &Vec3) -> f64x4 {
+        let mut d = f64x4::ZERO;
         for axis in 0..3 {
-            let (bl, bh) = (b.min[axis], b.max[axis]);
-            let (lo, hi) = (&self.lo[axis], &self.hi[axis]);
-            for ((dk, &l), &h) in d.iter_mut().zip(lo).zip(hi) {
-                let below = f64::from(l) - bh;
-                let above = bl - f64::from(h);
-                let g = if below > above { below } else { above };
-                let g = if g > 0.0 { g } else { 0.0 };
-                *dk += g * g;
-            }
+            let lo = f64x4::new(self.lo[axis].map(f64::from));
+            let hi = f64x4::new(self.hi[axis].map(f64::from));
+            let below = lo - f64x4::splat(high[axis]);
+            let above = f64x4::splat(low[axis]) - hi;
+            // `fast_max` is the machine's max: an empty slot gives +∞ (its lo is +∞, hi −∞).
+            let g = below.fast_max(above).fast_max(f64x4::ZERO);
+            d += g * g;
         }
         d
     }
