@@ -25,6 +25,8 @@
 
 use std::cell::RefCell;
 
+use wide::f64x4;
+
 use crate::linalg::Vec3;
 use crate::search::aabb::Aabb;
 use crate::search::bvh::{Bvh, index};
@@ -44,66 +46,88 @@ const SPREAD: f64 = 8.0;
 /// Growth of the gathering radius over the previous packet's largest answer distance.
 const RADIUS_FACTOR: f64 = 1.25;
 
-/// The leaves gathered for a packet: boxes axis by axis, and leaf references.
-#[derive(Default)]
+/// The leaves gathered for a packet: boxes axis by axis, and leaf references (fixed capacity,
+/// [`MAX_LEAVES`], so a gathering allocates nothing).
 struct Gathered {
-    lo: [Vec<f64>; 3],
-    hi: [Vec<f64>; 3],
-    leaves: Vec<(usize, usize)>,
-    /// Per-query scratch: squared distances to the gathered boxes, and which boxes.
-    d2: Vec<f64>,
-    index: Vec<u32>,
+    lo: [Lanes; 3],
+    hi: [Lanes; 3],
+    leaves: [(u32, u32); MAX_LEAVES],
+    len: usize,
+    /// Per-query scratch: the gathered leaves within a query's bound and their squared distances.
+    d2: [f64; MAX_LEAVES + 4],
+    index: [u32; MAX_LEAVES + 4],
     /// Traversal stack of the gathering.
     stack: Vec<Child>,
 }
 
+/// One coordinate of every gathered box, four lanes at a time.
+type Lanes = [f64x4; MAX_LEAVES / 4];
+
+impl Default for Gathered {
+    fn default() -> Self {
+        Self {
+            lo: [[f64x4::ZERO; MAX_LEAVES / 4]; 3],
+            hi: [[f64x4::ZERO; MAX_LEAVES / 4]; 3],
+            leaves: [(0, 0); MAX_LEAVES],
+            len: 0,
+            d2: [0.0; MAX_LEAVES + 4],
+            index: [0; MAX_LEAVES + 4],
+            stack: Vec::new(),
+        }
+    }
+}
+
 impl Gathered {
     fn clear(&mut self) {
-        self.lo.iter_mut().chain(&mut self.hi).for_each(Vec::clear);
-        self.leaves.clear();
+        self.len = 0;
         self.stack.clear();
     }
 
-    fn push(&mut self, b: &Aabb, first: usize, count: usize) {
-        for axis in 0..3 {
-            self.lo[axis].push(b.min[axis]);
-            self.hi[axis].push(b.max[axis]);
+    /// Appends a leaf; `false` when [`MAX_LEAVES`] are gathered already.
+    fn push(&mut self, b: &Aabb, first: usize, count: usize) -> bool {
+        let j = self.len;
+        if j == MAX_LEAVES {
+            return false;
         }
-        self.leaves.push((first, count));
+        for axis in 0..3 {
+            self.lo[axis][j / 4].as_mut_array()[j % 4] = b.min[axis];
+            self.hi[axis][j / 4].as_mut_array()[j % 4] = b.max[axis];
+        }
+        self.leaves[j] = (index(first), index(count));
+        self.len = j + 1;
+        true
     }
 
     /// Lists the gathered leaves whose boxes are within `bound` (squared) of `p`: their indices
     /// and squared distances go to the front of `self.index` and `self.d2`; returns how many.
     fn candidates(&mut self, p: &Vec3, bound: f64) -> usize {
-        let n = self.leaves.len();
-        self.d2.clear();
-        self.d2.resize(n, 0.0);
-        self.index.resize(n, 0);
-        for axis in 0..3 {
-            let x = p[axis];
-            let (lo, hi) = (&self.lo[axis][..n], &self.hi[axis][..n]);
-            for ((d, &l), &h) in self.d2.iter_mut().zip(lo).zip(hi) {
-                let below = l - x;
-                let above = x - h;
-                let g = if below > above { below } else { above };
-                let g = if g > 0.0 { g } else { 0.0 };
-                *d += g * g;
-            }
-        }
-        // Compaction in place: slot `kept` is written before it is read again.
+        let n = self.len;
+        let x: [f64x4; 3] = std::array::from_fn(|axis| f64x4::splat(p[axis]));
         let mut kept = 0;
-        for j in 0..n {
-            let d = self.d2[j];
-            self.d2[kept] = d;
-            self.index[kept] = index(j);
-            kept += usize::from(d <= bound);
+        for block in 0..n.div_ceil(4) {
+            let mut d = f64x4::ZERO;
+            for ((lo, hi), x) in self.lo.iter().zip(&self.hi).zip(&x) {
+                let below = lo[block] - *x;
+                let above = *x - hi[block];
+                let g = below.fast_max(above).fast_max(f64x4::ZERO);
+                d += g * g;
+            }
+            // Lanes past the end hold stale boxes: masked off.
+            let live = (1u32 << (n - 4 * block).min(4)) - 1;
+            let mask = d.simd_le(f64x4::splat(bound)).to_bitmask() & live;
+            // Branch-free compaction: every lane is written, the count advances for kept lanes.
+            for (k, &dk) in d.as_array().iter().enumerate() {
+                self.d2[kept] = dk;
+                self.index[kept] = index(4 * block + k);
+                kept += ((mask >> k) & 1) as usize;
+            }
         }
         kept
     }
 }
 
 thread_local! {
-    static GATHERED: RefCell<Gathered> = RefCell::new(Gathered::default());
+    static GATHERED: RefCell<Box<Gathered>> = RefCell::new(Box::default());
 }
 
 /// The state carried from packet to packet within a chunk.
@@ -161,7 +185,7 @@ impl Bvh {
             let seed = hint.and_then(|f| self.candidate(surface, q, f));
             *hit = self
                 .closest_candidate(surface, q, max2, seed)
-                .map(|c| c.finish(q));
+                .map(|c| self.finish(c, q));
             *hint = hit.map(|h| h.facet).or(*hint);
         }
     }
@@ -195,10 +219,9 @@ impl Bvh {
                 }
                 match as_leaf(c) {
                     Some((first, count)) => {
-                        if g.leaves.len() == MAX_LEAVES {
+                        if !g.push(&node.child_box(k), first, count) {
                             return false;
                         }
-                        g.push(&node.child_box(k), first, count);
                     }
                     None => g.stack.push(c),
                 }
@@ -234,6 +257,7 @@ impl Bvh {
             }
             for i in 0..n {
                 let (d2, (first, count)) = (g.d2[i], g.leaves[g.index[i] as usize]);
+                let (first, count) = (first as usize, count as usize);
                 if d2 <= Candidate::bound(&best, max2) {
                     self.offer_leaf(surface, q, first, count, max2, &mut best);
                 }
@@ -241,7 +265,7 @@ impl Bvh {
             if best.map_or(max2, |b| b.d2) > radius2 {
                 best = self.closest_candidate(surface, q, max2, best);
             }
-            *hit = best.map(|c| c.finish(q));
+            *hit = best.map(|c| self.finish(c, q));
             *hint = hit.map(|h| h.facet).or(*hint);
         }
     }

@@ -87,34 +87,25 @@ impl Query {
     }
 }
 
-/// The best candidate so far: squared distance, facet, and the corners to finish it with.
+/// The best candidate so far: squared distance, facet, and where its corners are (the tree's slot,
+/// or the facet itself for the brute-force search).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Candidate {
     pub(crate) d2: f64,
     pub(crate) facet: u32,
-    pub(crate) corners: [Vec3; 3],
+    pub(crate) slot: u32,
 }
 
 impl Candidate {
     /// Offers a facet: kept when it is within `max2` and better than the current best.
     #[inline]
-    pub(crate) fn offer(
-        best: &mut Option<Candidate>,
-        d2: f64,
-        facet: u32,
-        corners: &[Vec3; 3],
-        max2: f64,
-    ) {
+    pub(crate) fn offer(best: &mut Option<Candidate>, d2: f64, facet: u32, slot: u32, max2: f64) {
         let better = match best {
             None => d2 <= max2,
             Some(b) => d2 < b.d2 || (d2 == b.d2 && facet < b.facet),
         };
         if better {
-            *best = Some(Candidate {
-                d2,
-                facet,
-                corners: *corners,
-            });
+            *best = Some(Candidate { d2, facet, slot });
         }
     }
 
@@ -124,10 +115,9 @@ impl Candidate {
         best.map_or(max2, |b| b.d2) * TIE_MARGIN
     }
 
-    /// The hit, measured with the kernel.
+    /// The hit, measured with the kernel on the candidate's `corners`.
     #[inline]
-    pub(crate) fn finish(&self, q: &Query) -> Hit {
-        let [a, b, c] = &self.corners;
+    pub(crate) fn finish(&self, [a, b, c]: &[Vec3; 3], q: &Query) -> Hit {
         Hit {
             facet: self.facet,
             closest: closest_point_on_triangle(a, b, c, &q.point),
@@ -155,7 +145,7 @@ impl Bvh {
     #[must_use]
     pub fn closest(&self, surface: &Surface, q: &Query, max_distance: f64) -> Option<Hit> {
         self.closest_candidate(surface, q, max_distance * max_distance, None)
-            .map(|c| c.finish(q))
+            .map(|c| self.finish(c, q))
     }
 
     /// [`Bvh::closest`] seeded with `hint`, a facet likely to be close to `q` (the answer of a
@@ -173,7 +163,7 @@ impl Bvh {
     ) -> Option<Hit> {
         let seed = hint.and_then(|f| self.candidate(surface, q, f));
         self.closest_candidate(surface, q, max_distance * max_distance, seed)
-            .map(|c| c.finish(q))
+            .map(|c| self.finish(c, q))
     }
 
     /// `facet` as a candidate for `q`: `None` when it is out of range, degenerate (not in the tree)
@@ -188,7 +178,7 @@ impl Bvh {
         Some(Candidate {
             d2: distance_squared_to_triangle(&c[0], &c[1], &c[2], &q.point),
             facet,
-            corners: *c,
+            slot,
         })
     }
 
@@ -237,6 +227,12 @@ impl Bvh {
         best
     }
 
+    /// The hit of a candidate of this tree, measured with the kernel.
+    #[inline]
+    pub(crate) fn finish(&self, c: Candidate, q: &Query) -> Hit {
+        c.finish(&self.corners[c.slot as usize], q)
+    }
+
     /// Offers the facets of the leaf `first..first + count` (evaluated together, see
     /// [`lanes`]) to `best`.
     #[inline]
@@ -251,10 +247,10 @@ impl Bvh {
     ) {
         let corners = &self.corners[first..first + count];
         let d2 = lanes::distances_squared(corners, &q.point);
-        for (k, c) in corners.iter().enumerate() {
+        for (k, &d2) in d2.iter().take(corners.len()).enumerate() {
             let facet = self.order[first + k];
             if !q.excludes(surface, facet) {
-                Candidate::offer(best, d2[k], facet, c, max2);
+                Candidate::offer(best, d2, facet, index(first + k), max2);
             }
         }
     }
@@ -368,7 +364,7 @@ pub fn brute_force_closest(
             continue;
         }
         let d2 = distance_squared_to_triangle(&c[0], &c[1], &c[2], &q.point);
-        Candidate::offer(&mut best, d2, facet, &c, max2);
+        Candidate::offer(&mut best, d2, facet, facet, max2);
     }
-    best.map(|c| c.finish(q))
+    best.map(|c| c.finish(&surface.corners(c.facet, positions), q))
 }
