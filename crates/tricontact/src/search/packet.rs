@@ -242,10 +242,18 @@ impl Bvh {
         hint: &mut Option<u32>,
         g: &mut Gathered,
     ) {
+        // The gathered leaf that held the previous answer: measured first, whole, for the bound.
+        let mut previous: Option<u32> = None;
         for (q, hit) in queries.iter().zip(hits.iter_mut()) {
-            let mut best = hint
-                .and_then(|f| self.candidate(surface, q, f))
-                .filter(|c| c.d2 <= max2);
+            let mut best = None;
+            match previous {
+                Some(j) => {
+                    let (first, count) = g.leaves[j as usize];
+                    self.offer_leaf(surface, q, first as usize, count as usize, max2, &mut best);
+                }
+                None => best = hint.and_then(|f| self.candidate(surface, q, f)),
+            }
+            best = best.filter(|c| c.d2 <= max2);
             // The leaves within the first bound, listed without branches, then measured while
             // the bound shrinks.
             let n = g.candidates(&q.point, Candidate::bound(&best, max2));
@@ -255,13 +263,19 @@ impl Bvh {
                 g.d2.swap(0, nearest);
                 g.index.swap(0, nearest);
             }
+            let mut won = previous;
             for i in 0..n {
-                let (d2, (first, count)) = (g.d2[i], g.leaves[g.index[i] as usize]);
-                let (first, count) = (first as usize, count as usize);
-                if d2 <= Candidate::bound(&best, max2) {
-                    self.offer_leaf(surface, q, first, count, max2, &mut best);
+                let j = g.index[i];
+                let (first, count) = g.leaves[j as usize];
+                if Some(j) != previous && g.d2[i] <= Candidate::bound(&best, max2) {
+                    let before = best.map(|b| b.slot);
+                    self.offer_leaf(surface, q, first as usize, count as usize, max2, &mut best);
+                    if best.map(|b| b.slot) != before {
+                        won = Some(j);
+                    }
                 }
             }
+            previous = won.filter(|_| best.is_some());
             if best.map_or(max2, |b| b.d2) > radius2 {
                 best = self.closest_candidate(surface, q, max2, best);
             }

@@ -45,7 +45,7 @@ thread_local! {
 }
 
 /// Queries per sequential chunk of [`Bvh::closest_all`] (packets and hints run within a chunk).
-pub const HINT_CHUNK: usize = 256;
+pub const HINT_CHUNK: usize = 1024;
 
 /// Relative margin on squared distances below which a box is never pruned.
 pub(crate) const TIE_MARGIN: f64 = 1.0 + 1e-12;
