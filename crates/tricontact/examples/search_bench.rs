@@ -11,7 +11,9 @@
 //! space are neighbours in the list); "random" queries are shuffled. Per-core figures are the CPU
 //! time of a one-thread pool (so they hold on a shared machine); brute force is timed on a subset
 //! of queries and its ratio is per query (measured per query on the subset, not extrapolated
-//! from a model). Two-thread figures are wall-clock.
+//! from a model). Two-thread figures are wall-clock. Answers (ours and parry's) are written into
+//! buffers made once, as a solver searching at every iteration would: allocating a fresh buffer
+//! of 10⁶ answers costs about 50 ns per answer in page faults, as much as a search.
 //!
 //! Incremental search: neighbourhood lists (skin half an element) are made at the initial
 //! positions; the torus is then deformed by a wave and a twist of 0.01, 0.1 and 0.2 element sizes
@@ -123,9 +125,17 @@ fn scene(nu: u32, nv: u32) {
     );
 
     let inf = f64::INFINITY;
-    let (t_coh, hits) = time_one_core(3, || bvh.closest_all(&surface, &queries, inf));
-    let (t_rand, _) = time_one_core(3, || bvh.closest_all(&surface, &random, inf));
-    let (t_coh2, _) = time(3, || bvh.closest_all(&surface, &queries, inf));
+    // Answers go into buffers made once, as a solver searching at every iteration does.
+    let buffer = Mutex::new(vec![None; queries.len()]);
+    let into = |qs: &[Query]| {
+        let mut out = buffer.lock().expect("buffer");
+        bvh.closest_all_into(&surface, qs, inf, &mut out)
+            .expect("one answer per query");
+    };
+    let (t_rand, ()) = time_one_core(3, || into(&random));
+    let (t_coh2, ()) = time(3, || into(&queries));
+    let (t_coh, ()) = time_one_core(3, || into(&queries));
+    let hits = buffer.lock().expect("buffer").clone();
     println!(
         "queries, coherent       {:>9.2} ms   {:>7.2} M/s per core   (2 threads: {:.2} M/s)",
         t_coh * 1e3,
@@ -170,12 +180,19 @@ fn scene(nu: u32, nv: u32) {
     let (t_pbuild, mesh) = time(1, || {
         TriMesh::new(pv.clone(), facets.clone()).expect("parry trimesh")
     });
-    let (t_parry, proj) = time_one_core(3, || {
-        queries
-            .iter()
-            .map(|q| mesh.project_local_point(PVec::new(q.point.x, q.point.y, q.point.z), false))
-            .collect::<Vec<_>>()
+    let projections = Mutex::new(vec![None; queries.len()]);
+    let (t_parry, ()) = time_one_core(3, || {
+        let mut out = projections.lock().expect("buffer");
+        for (p, q) in out.iter_mut().zip(&queries) {
+            *p = Some(mesh.project_local_point(PVec::new(q.point.x, q.point.y, q.point.z), false));
+        }
     });
+    let proj: Vec<_> = projections
+        .into_inner()
+        .expect("buffer")
+        .into_iter()
+        .map(|p| p.expect("every query projected"))
+        .collect();
     let worst = hits
         .iter()
         .zip(&proj)
@@ -248,20 +265,30 @@ fn incremental(
         });
         assert_eq!(kind, Update::Refit);
         let refitted = tree.lock().expect("tree").clone();
-        let (t_full, full) = time_one_core(3, || refitted.closest_all(surface, queries, inf));
+        let buffer = Mutex::new(vec![None; queries.len()]);
+        let (t_full, ()) = time_one_core(3, || {
+            let mut out = buffer.lock().expect("buffer");
+            refitted
+                .closest_all_into(surface, queries, inf, &mut out)
+                .expect("one answer per query");
+        });
+        let full = buffer.lock().expect("buffer").clone();
         // A fallback updates the tree (each call: the update refits it again).
         let stale = Mutex::new(bvh.clone());
-        let (t_inc, (answers, stats)) = time_one_core(3, || {
+        let (t_inc, stats) = time_one_core(3, || {
+            let mut out = buffer.lock().expect("buffer");
             lists
-                .closest_all(
+                .closest_all_into(
                     &mut stale.lock().expect("tree"),
                     surface,
                     &moved,
                     queries,
                     inf,
+                    &mut out,
                 )
                 .expect("incremental")
         });
+        let answers = buffer.lock().expect("buffer").clone();
         let mismatches = answers.iter().zip(&full).filter(|(a, b)| a != b).count();
         let changed = hits
             .iter()

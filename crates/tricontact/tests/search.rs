@@ -206,10 +206,46 @@ fn torus_queries_refit_and_incremental_search_match_brute_force() {
     assert_eq!(stats.queries, queries.len());
     assert!(stats.fallbacks * 100 < stats.queries, "{stats:?}");
     assert!(stats.measured < 10 * stats.queries, "{stats:?}");
+    // Into a reused buffer holding the answers at the old positions: every entry is rewritten.
+    let mut buffer = first.clone();
+    let stats_into = lists
+        .closest_all_into(
+            &mut bvh,
+            &surface,
+            &moved,
+            &queries,
+            f64::INFINITY,
+            &mut buffer,
+        )
+        .unwrap();
+    assert_eq!(
+        (buffer.as_slice(), stats_into),
+        (incremental.as_slice(), stats)
+    );
+    assert!(matches!(
+        lists.closest_all_into(&mut bvh, &surface, &moved, &queries, 1.0, &mut buffer[1..]),
+        Err(SurfaceError::AnswerCount { answers, queries: q }) if answers + 1 == q
+    ));
     assert_eq!(bvh.update(&surface, &moved).unwrap(), Update::Refit);
     assert_eq!(
         bvh.closest_all(&surface, &queries, f64::INFINITY),
         incremental
+    );
+    // The tree into the same buffer, now holding the incremental answers, with a search distance.
+    let limited = bvh.closest_all(&surface, &queries, 0.5 * h);
+    bvh.closest_all_into(&surface, &queries, 0.5 * h, &mut buffer)
+        .unwrap();
+    assert_eq!(buffer, limited);
+    assert!(limited.iter().any(Option::is_none) && limited.iter().any(Option::is_some));
+    let err = bvh
+        .closest_all_into(&surface, &queries, 1.0, &mut buffer[..3])
+        .unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        format!(
+            "the answer buffer holds 3 entries for {} queries",
+            queries.len()
+        )
     );
     // A large motion (the torus swollen by half) degrades the refit: the tree is rebuilt.
     let swollen: Vec<Vec3> = nodes

@@ -183,11 +183,38 @@ impl Neighbourhoods {
         queries: &[Query],
         max_distance: f64,
     ) -> Result<(Vec<Option<Hit>>, IncrementalStats), SurfaceError> {
+        let mut hits = vec![None; queries.len()];
+        let stats =
+            self.closest_all_into(bvh, surface, positions, queries, max_distance, &mut hits)?;
+        Ok((hits, stats))
+    }
+
+    /// [`Neighbourhoods::closest_all`] written into `hits`, one entry per query (a buffer reused
+    /// from call to call, see [`Bvh::closest_all_into`]).
+    ///
+    /// # Errors
+    /// As [`Neighbourhoods::closest_all`], and [`SurfaceError::AnswerCount`] if `hits` does not
+    /// have one entry per query.
+    pub fn closest_all_into(
+        &self,
+        bvh: &mut Bvh,
+        surface: &Surface,
+        positions: &[Vec3],
+        queries: &[Query],
+        max_distance: f64,
+        hits: &mut [Option<Hit>],
+    ) -> Result<IncrementalStats, SurfaceError> {
         surface.check_positions(positions)?;
         if queries.len() != self.points.len() {
             return Err(SurfaceError::QueryCount {
                 expected: self.points.len(),
                 given: queries.len(),
+            });
+        }
+        if hits.len() != queries.len() {
+            return Err(SurfaceError::AnswerCount {
+                queries: queries.len(),
+                answers: hits.len(),
             });
         }
         let delta = self.motion(positions);
@@ -200,7 +227,6 @@ impl Neighbourhoods {
         let max2 = max_distance * max_distance;
         // Answers are written in place; the (rare) uncertified queries are collected with their
         // best facet as the tree's hint.
-        let mut hits: Vec<Option<Hit>> = vec![None; queries.len()];
         let (measured, fallbacks) = hits
             .par_iter_mut()
             .zip(queries.par_iter())
@@ -242,7 +268,7 @@ impl Neighbourhoods {
                 hits[*i] = hit;
             }
         }
-        Ok((hits, stats))
+        Ok(stats)
     }
 
     /// Query `i` from its list (see [`Outcome`]), given the motion `δ` and the squared search

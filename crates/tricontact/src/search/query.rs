@@ -37,7 +37,7 @@ use crate::linalg::Vec3;
 use crate::search::bvh::{Bvh, NO_SLOT, index};
 use crate::search::lanes;
 use crate::search::node::{Child, EMPTY, as_leaf};
-use crate::search::surface::Surface;
+use crate::search::surface::{Surface, SurfaceError};
 
 thread_local! {
     /// The traversal stack of [`Bvh::closest`], kept per thread so a query allocates nothing.
@@ -247,10 +247,15 @@ impl Bvh {
     ) {
         let corners = &self.corners[first..first + count];
         let d2 = lanes::distances_squared(corners, &q.point);
-        for (k, &d2) in d2.iter().take(corners.len()).enumerate() {
-            let facet = self.order[first + k];
-            if !q.excludes(surface, facet) {
-                Candidate::offer(best, d2, facet, index(first + k), max2);
+        // Only a facet at most as far as the best so far can win (a tie is decided by the index):
+        // the others are passed over without looking up their index.
+        let limit = best.map_or(max2, |b| b.d2);
+        for (k, &d2) in d2.iter().take(count).enumerate() {
+            if d2 <= limit {
+                let facet = self.order[first + k];
+                if !q.excludes(surface, facet) {
+                    Candidate::offer(best, d2, facet, index(first + k), max2);
+                }
             }
         }
     }
@@ -308,11 +313,45 @@ impl Bvh {
         max_distance: f64,
     ) -> Vec<Option<Hit>> {
         let mut out = vec![None; queries.len()];
+        self.answer_all(surface, queries, max_distance, &mut out);
+        out
+    }
+
+    /// [`Bvh::closest_all`] written into `out`, one entry per query: a solver that searches at
+    /// every iteration reuses one buffer instead of allocating (and faulting in) a new one each
+    /// time, which costs as much as the search for millions of queries.
+    ///
+    /// # Errors
+    /// [`SurfaceError::AnswerCount`] if `out` does not have one entry per query.
+    pub fn closest_all_into(
+        &self,
+        surface: &Surface,
+        queries: &[Query],
+        max_distance: f64,
+        out: &mut [Option<Hit>],
+    ) -> Result<(), SurfaceError> {
+        if out.len() != queries.len() {
+            return Err(SurfaceError::AnswerCount {
+                queries: queries.len(),
+                answers: out.len(),
+            });
+        }
+        self.answer_all(surface, queries, max_distance, out);
+        Ok(())
+    }
+
+    /// Answers `queries` into `out` (of the same length), chunk by chunk in parallel.
+    fn answer_all(
+        &self,
+        surface: &Surface,
+        queries: &[Query],
+        max_distance: f64,
+        out: &mut [Option<Hit>],
+    ) {
         let max2 = max_distance * max_distance;
         out.par_chunks_mut(HINT_CHUNK)
             .zip(queries.par_chunks(HINT_CHUNK))
             .for_each(|(hits, qs)| self.closest_chunk(surface, qs, hits, max2));
-        out
     }
 }
 

@@ -42,6 +42,14 @@ pub enum SurfaceError {
         /// Queries given.
         given: usize,
     },
+    /// An answer buffer does not have one entry per query.
+    #[error("the answer buffer holds {answers} entries for {queries} queries")]
+    AnswerCount {
+        /// Queries given.
+        queries: usize,
+        /// Entries in the answer buffer.
+        answers: usize,
+    },
     /// A facet names the same node twice.
     #[error("facet {facet} repeats node {node}")]
     RepeatedNode {
