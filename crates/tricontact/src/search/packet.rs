@@ -2,9 +2,20 @@
 //!
 //! Queries that come in spatial order (the nodes of a slave surface, numbered along it) ask about
 //! the same few leaves. For a packet of [`PACKET`] consecutive queries with bounding box `Q`, one
-//! traversal gathers every leaf whose box is within a radius `R` of `Q`. Each query then measures
-//! only the gathered leaves whose boxes are within its own bound (a flat, vectorisable loop over
-//! the gathered boxes), starting from the previous query's answer as a hint.
+//! traversal gathers every leaf whose box is within a radius `R` of `Q` (into fixed arrays, boxes
+//! four to a `wide::f64x4`). Each query first measures the whole gathered leaf that held the
+//! previous query's answer (for the first query of a packet: the previous answer's facet), which
+//! gives its first bound; it then lists the gathered leaves whose boxes are within that bound (a
+//! flat loop, four boxes per step, compacted without branches) and measures them nearest box
+//! first while the bound shrinks.
+//!
+//! On the 10⁵-facet torus of the benchmark a packet gathers about 69 leaves in 62 node visits,
+//! and a query lists 5.7 of them and measures 5. Tried and not kept (measured on that scene):
+//! a cylinder ("puck") bound per leaf, centre, normal, radius and thickness, which would cut the
+//! measured leaves to 3.2 but made the query 6 % slower (its data and square root cost more than
+//! the leaves it saves); branch-free child selection in the gathering and prefetching the
+//! listed leaves (within noise); packets of 8, 24 or 32 (within 5 %); a gathering radius of 1.5
+//! times the previous answers (25 % slower).
 //!
 //! # Exactness
 //! A leaf left out is farther than `R` from `Q`, hence from every query of the packet. So when a

@@ -45,6 +45,9 @@ thread_local! {
 }
 
 /// Queries per sequential chunk of [`Bvh::closest_all`] (packets and hints run within a chunk).
+/// A chunk's first packet is answered query by query (it has no gathering radius yet): with 1024
+/// queries that is one packet in 64 (256 was measured 3 % slower), and 10⁵ queries still make
+/// about a hundred chunks for the threads.
 pub const HINT_CHUNK: usize = 1024;
 
 /// Relative margin on squared distances below which a box is never pruned.
