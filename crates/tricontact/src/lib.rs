@@ -5,8 +5,8 @@
 //!
 //! * [`facet`]: the facet normal `w`, the triad `U, V, W` and their derivatives;
 //! * [`node_facet`]: the gap `P = (x_l − x_i)·W`, shape functions `N_a`, `∇P`, `∇²P`;
-//! * [`penalty`]: the penalty force `αP∇P` (resistance `R_a = αN_aPW`) and tangent;
-//! * [`multiplier`]: the constraint `c = P`, its Jacobian and geometric stiffness `λ∇²c`;
+//! * [`mod@penalty`]: the penalty force `αP∇P` (resistance `R_a = αN_aPW`) and tangent;
+//! * [`mod@multiplier`]: the constraint `c = P`, its Jacobian and geometric stiffness `λ∇²c`;
 //! * [`closest`]: closest points near facet boundaries (face / edge / vertex), point–edge and
 //!   point–vertex distances with derivatives;
 //! * [`contact`]: the facet-choice rule at edges and vertices, assembled penalty terms;

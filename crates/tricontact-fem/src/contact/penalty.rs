@@ -6,7 +6,7 @@
 //!
 //! `f` is an internal force (it enters `r = f_int − f_ext` with a plus sign); the contact force on
 //! the slave node is `−αP W`, i.e. the multiplier equivalent is `λ = αP ≤ 0`. Finite sliding uses the
-//! kernel's [`tricontact::penalty`]; small sliding drops `∇²P`.
+//! kernel's [`tricontact::penalty()`]; small sliding drops `∇²P`.
 
 use tricontact::{GeometryError, Mat12, Vec12};
 

@@ -1,8 +1,8 @@
 //! Closest-point queries used near facet boundaries, one file per query:
 //!
 //! * [`point_triangle`]: where on a facet the closest point to a node lies (face, edge, vertex);
-//! * [`point_edge`]: distance from a node to an edge's line, with gradient and Hessian;
-//! * [`point_vertex`]: distance from a node to a vertex, with gradient and Hessian.
+//! * [`mod@point_edge`]: distance from a node to an edge's line, with gradient and Hessian;
+//! * [`mod@point_vertex`]: distance from a node to a vertex, with gradient and Hessian.
 
 pub mod point_edge;
 pub mod point_triangle;

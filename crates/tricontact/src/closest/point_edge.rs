@@ -21,7 +21,7 @@
 //! `−n⊗∂t/∂x_c − t ∂n/∂x_c` for `b`.
 //!
 //! The result is the distance to the infinite line; it is the distance to the edge when
-//! `0 ≤ t ≤ 1` (otherwise the closest feature is a vertex, see [`crate::closest::point_vertex`]).
+//! `0 ≤ t ≤ 1` (otherwise the closest feature is a vertex, see [`crate::closest::point_vertex()`]).
 
 use nalgebra::{SMatrix, SVector};
 

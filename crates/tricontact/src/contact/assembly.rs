@@ -7,7 +7,7 @@
 //! Φ = Σ ½ α P²,    f = ∂Φ/∂x = Σ α P ∇P,    K = ∂f/∂x = Σ α (∇P⊗∇P + P ∇²P)
 //! ```
 //!
-//! with each pair's 12-entry gradient and 12×12 tangent from [`crate::penalty`] scattered by its
+//! with each pair's 12-entry gradient and 12×12 tangent from [`crate::penalty()`] scattered by its
 //! node numbers. `f` is an internal force: it enters the residual `r = f_int − f_ext` with a plus
 //! sign. Inactive constraints (`P > 0`) contribute nothing.
 

@@ -1,7 +1,7 @@
 //! Per-node enforcement of the contact constraint: penalty, Lagrange multiplier with a
 //! complementarity switch, and augmented Lagrangian — as blocks a finite-element code scatters.
 //!
-//! Sign convention (see [`crate::multiplier`]): the constraint enters as `Π + λP`; a compressive
+//! Sign convention (see [`mod@crate::multiplier`]): the constraint enters as `Π + λP`; a compressive
 //! contact force has `λ ≤ 0`; the contact conditions are `P ≥ 0`, `λ ≤ 0`, `λ P = 0`.
 //!
 //! # Multiplier with a complementarity switch (primal–dual active set)

@@ -8,7 +8,7 @@
 //! 3. The topology follows from the sorted codes ([`crate::search::layout`]): binary splits at
 //!    Z-order cell boundaries, collapsed to four-wide nodes, stored depth-first.
 //! 4. The corner positions of every facet are copied in leaf order, so a query reads a leaf's
-//!    facets from one contiguous block, and the boxes ([`crate::search::node`]) are filled
+//!    facets from one contiguous block, and the boxes (`search::node`) are filled
 //!    bottom-up from those copies, leaf boxes inflated by the search distance `r` (a parallel
 //!    recursion over subtrees, which are contiguous runs of nodes).
 //!
