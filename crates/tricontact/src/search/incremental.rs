@@ -347,7 +347,7 @@ impl Bvh {
                     continue;
                 }
                 let corners = &self.corners[first..first + count];
-                let d2 = lanes::distances_squared(corners, &q.point);
+                let d2 = lanes::distances_squared(corners, &q.point).to_array();
                 for (k, &d2) in d2.iter().enumerate().take(count) {
                     let facet = self.order[first + k];
                     if !q.excludes(surface, facet) && d2 <= bound(best) {

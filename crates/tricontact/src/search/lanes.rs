@@ -21,10 +21,8 @@ use crate::linalg::Vec3;
 /// Facets evaluated together.
 pub(crate) const LANES: usize = 4;
 
-type L = [f64; LANES];
-
 /// One coordinate of four facets.
-type V = f64x4;
+pub(crate) type V = f64x4;
 
 /// Lane-wise dot product, summed as nalgebra sums a 3-vector dot: `(x·x + y·y) + z·z`.
 #[inline(always)]
@@ -49,7 +47,7 @@ fn select(n: &mut [V; 3], mask: V, value: [V; 3]) {
 /// Squared distances from `p` to the facets `corners[..]` (one to four of them); lanes beyond
 /// `corners.len()` repeat the last facet.
 #[inline]
-pub(crate) fn distances_squared(corners: &[[Vec3; 3]], p: &Vec3) -> L {
+pub(crate) fn distances_squared(corners: &[[Vec3; 3]], p: &Vec3) -> V {
     debug_assert!((1..=LANES).contains(&corners.len()));
     let last = corners.len() - 1;
     let padded: [&[Vec3; 3]; LANES] = std::array::from_fn(|k| &corners[k.min(last)]);
@@ -66,38 +64,51 @@ pub(crate) fn distances_squared(corners: &[[Vec3; 3]], p: &Vec3) -> L {
     let vc = d1 * d4 - d3 * d2;
     let va = d3 * d6 - d5 * d4;
     let vb = d5 * d2 - d1 * d6;
-    // The face, then each region of higher priority overrides it where its test holds.
+    // The region tests, in the scalar kernel's order of priority (vertices, edges, face).
     let (zero, one) = (V::ZERO, V::ONE);
-    let inv = one / (va + vb + vc);
-    let mut n = [va * inv, vb * inv, vc * inv];
-    let t2 = d2 / (d2 - d6);
-    let e2 = vb.simd_le(zero) & d2.simd_ge(zero) & d6.simd_le(zero);
-    select(&mut n, e2, [one - t2, zero, t2]);
-    let t1 = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    let e1 = va.simd_le(zero) & d4.simd_ge(d3) & d5.simd_ge(d6);
-    select(&mut n, e1, [zero, one - t1, t1]);
-    let t0 = d1 / (d1 - d3);
+    let v0 = d1.simd_le(zero) & d2.simd_le(zero);
+    let v1 = d3.simd_ge(zero) & d4.simd_le(d3);
+    let v2 = d6.simd_ge(zero) & d5.simd_le(d6);
     let e0 = vc.simd_le(zero) & d1.simd_ge(zero) & d3.simd_le(zero);
-    select(&mut n, e0, [one - t0, t0, zero]);
-    select(&mut n, d6.simd_ge(zero) & d5.simd_le(d6), [zero, zero, one]);
-    select(&mut n, d3.simd_ge(zero) & d4.simd_le(d3), [zero, one, zero]);
-    select(
-        &mut n,
-        d1.simd_le(zero) & d2.simd_le(zero),
-        [one, zero, zero],
-    );
+    let e1 = va.simd_le(zero) & d4.simd_ge(d3) & d5.simd_ge(d6);
+    let e2 = vb.simd_le(zero) & d2.simd_ge(zero) & d6.simd_le(zero);
+    let vertex = v0 | v1 | v2;
+    // One division per lane, that of the region selected: the face's `1 / (va + vb + vc)` or an
+    // edge's parameter, each the scalar kernel's own quotient (a vertex needs none). The face,
+    // then each region of higher priority overrides it where its test holds.
+    let (mut num, mut den) = (one, va + vb + vc);
+    let d43 = d4 - d3;
+    for (mask, (n, d)) in [
+        (e2, (d2, d2 - d6)),
+        (e1, (d43, d43 + (d5 - d6))),
+        (e0, (d1, d1 - d3)),
+        (vertex, (one, one)),
+    ] {
+        num = mask.select(n, num);
+        den = mask.select(d, den);
+    }
+    let t = num / den;
+    let mut n = [va * t, vb * t, vc * t];
+    select(&mut n, e2, [one - t, zero, t]);
+    select(&mut n, e1, [zero, one - t, t]);
+    select(&mut n, e0, [one - t, t, zero]);
+    select(&mut n, v2, [zero, zero, one]);
+    select(&mut n, v1, [zero, one, zero]);
+    select(&mut n, v0, [one, zero, zero]);
     // |p − (a N_a + b N_b + c N_c)|², summed as nalgebra sums it.
     let diff: [V; 3] = std::array::from_fn(|d| pl[d] - (a[d] * n[0] + b[d] * n[1] + c[d] * n[2]));
-    let mut out = dot(&diff, &diff).to_array();
+    let out = dot(&diff, &diff);
     let bad = (!(n[0].is_finite() & n[1].is_finite() & n[2].is_finite())).to_bitmask();
-    if bad != 0 {
-        for (k, [a, b, c]) in corners.iter().enumerate() {
-            if bad & (1 << k) != 0 {
-                out[k] = distance_squared_to_triangle(a, b, c, p);
-            }
+    if bad == 0 {
+        return out;
+    }
+    let mut out = out.to_array();
+    for (k, [a, b, c]) in corners.iter().enumerate() {
+        if bad & (1 << k) != 0 {
+            out[k] = distance_squared_to_triangle(a, b, c, p);
         }
     }
-    out
+    V::new(out)
 }
 
 #[cfg(test)]
@@ -106,7 +117,7 @@ mod tests {
     use crate::search::scenes::uniform;
 
     fn check(corners: &[[Vec3; 3]], p: &Vec3) {
-        let lanes = distances_squared(corners, p);
+        let lanes = distances_squared(corners, p).to_array();
         for (k, [a, b, c]) in corners.iter().enumerate() {
             let scalar = distance_squared_to_triangle(a, b, c, p);
             assert_eq!(

@@ -251,14 +251,16 @@ impl Bvh {
         let corners = &self.corners[first..first + count];
         let d2 = lanes::distances_squared(corners, &q.point);
         // Only a facet at most as far as the best so far can win (a tie is decided by the index):
-        // the others are passed over without looking up their index.
+        // the others are passed over without a branch each or a look-up of their index.
         let limit = best.map_or(max2, |b| b.d2);
-        for (k, &d2) in d2.iter().take(count).enumerate() {
-            if d2 <= limit {
-                let facet = self.order[first + k];
-                if !q.excludes(surface, facet) {
-                    Candidate::offer(best, d2, facet, index(first + k), max2);
-                }
+        let mut near = d2.simd_le(lanes::V::splat(limit)).to_bitmask() & ((1 << count) - 1);
+        let d2 = d2.as_array();
+        while near != 0 {
+            let k = near.trailing_zeros() as usize;
+            near &= near - 1;
+            let facet = self.order[first + k];
+            if !q.excludes(surface, facet) {
+                Candidate::offer(best, d2[k], facet, index(first + k), max2);
             }
         }
     }
