@@ -15,9 +15,9 @@
 //! `d₀(f) − m` exceeds the best distance `b` found: the facets left are farther than `b`. A facet
 //! that is not listed was farther than `ρ`, so it is now farther than `ρ − m`; when `b < ρ − m` the
 //! best measured facet is the closest of all. Candidates are measured with the kernel the tree
-//! uses ([`crate::distance_squared_to_triangle`]) and compared in the same total order (distance, then
-//! facet index), so the answer is the tree's, exactly. A margin of 10⁻⁹ of the coordinates'
-//! magnitude absorbs rounding in these bounds.
+//! uses ([`crate::distance_squared_to_triangle`]) and compared in the same total order
+//! (distance, then facet index), so the answer is the tree's, exactly. A margin of 10⁻⁹ of the
+//! coordinates' magnitude absorbs rounding in these bounds.
 //!
 //! A query whose answer is not certified falls back to the tree, which
 //! [`Neighbourhoods::closest_all`] updates first, once, only if some query needs it: the certified
