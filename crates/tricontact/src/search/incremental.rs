@@ -211,12 +211,7 @@ impl Neighbourhoods {
                 given: queries.len(),
             });
         }
-        if hits.len() != queries.len() {
-            return Err(SurfaceError::AnswerCount {
-                queries: queries.len(),
-                answers: hits.len(),
-            });
-        }
+        Surface::check_answers(queries.len(), hits.len())?;
         let delta = self.motion(positions);
         let valid: Vec<u32> = self
             .degenerate

@@ -335,12 +335,7 @@ impl Bvh {
         max_distance: f64,
         out: &mut [Option<Hit>],
     ) -> Result<(), SurfaceError> {
-        if out.len() != queries.len() {
-            return Err(SurfaceError::AnswerCount {
-                queries: queries.len(),
-                answers: out.len(),
-            });
-        }
+        Surface::check_answers(queries.len(), out.len())?;
         self.answer_all(surface, queries, max_distance, out);
         Ok(())
     }
