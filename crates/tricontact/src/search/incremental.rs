@@ -53,6 +53,9 @@ use crate::search::surface::{Surface, SurfaceError};
 /// Relative margin of the certificate, on the magnitude of the coordinates and distances.
 const MARGIN: f64 = 1e-9;
 
+/// Queries answered in one sequential run of [`Neighbourhoods::closest_all_into`].
+const CHUNK: usize = 256;
+
 /// What one call of [`Neighbourhoods::closest_all`] did.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct IncrementalStats {
@@ -92,9 +95,9 @@ struct Best {
     closest: ClosestPoint,
 }
 
-/// A query's answer from its list: `Ok(answer)` when certified, else `Err(best facet found)`,
-/// with the number of facets measured.
-type Outcome = (Result<Option<Hit>, Option<u32>>, usize);
+/// `Ok` when a query's answer was certified (and written), else `Err(best facet found)`, with the
+/// number of facets measured.
+type Outcome = (Result<(), Option<u32>>, usize);
 
 impl Neighbourhoods {
     /// Lists, for each query, the facets within its closest distance plus `skin` (in the model's
@@ -221,24 +224,25 @@ impl Neighbourhoods {
             .collect();
         let max2 = max_distance * max_distance;
         // Answers are written in place; the (rare) uncertified queries are collected with their
-        // best facet as the tree's hint.
+        // best facet as the tree's hint. Chunks in parallel, a plain loop within each (rayon's
+        // adaptors per query cost about 10 of 128 ns on the 10⁵-facet torus).
         let (measured, fallbacks) = hits
-            .par_iter_mut()
-            .zip(queries.par_iter())
+            .par_chunks_mut(CHUNK)
+            .zip(queries.par_chunks(CHUNK))
             .enumerate()
-            .with_min_len(256)
-            .fold(
-                || (0usize, Vec::new()),
-                |(mut measured, mut fallbacks), (i, (hit, q))| {
-                    let (outcome, n) = self.answer(i, q, surface, positions, (delta, max2), &valid);
+            .map(|(c, (hits, queries))| {
+                let (mut measured, mut fallbacks) = (0, Vec::new());
+                for (k, (hit, q)) in hits.iter_mut().zip(queries).enumerate() {
+                    let i = c * CHUNK + k;
+                    let (outcome, n) =
+                        self.answer((i, q), surface, positions, (delta, max2), &valid, hit);
                     measured += n;
-                    match outcome {
-                        Ok(answer) => *hit = answer,
-                        Err(hint) => fallbacks.push((i, hint)),
+                    if let Err(hint) = outcome {
+                        fallbacks.push((i, hint));
                     }
-                    (measured, fallbacks)
-                },
-            )
+                }
+                (measured, fallbacks)
+            })
             .reduce(
                 || (0, Vec::new()),
                 |(m1, mut f1), (m2, f2)| {
@@ -266,16 +270,17 @@ impl Neighbourhoods {
         Ok(stats)
     }
 
-    /// Query `i` from its list (see [`Outcome`]), given the motion `δ` and the squared search
-    /// distance.
+    /// Query `i` from its list, given the motion `δ` and the squared search distance: a certified
+    /// answer is written into `hit` (returning the answer by value, one copy more, was measured
+    /// 4 % slower); see [`Outcome`].
     fn answer(
         &self,
-        i: usize,
-        q: &Query,
+        (i, q): (usize, &Query),
         surface: &Surface,
         positions: &[Vec3],
         (delta, max2): (f64, f64),
         valid: &[u32],
+        hit: &mut Option<Hit>,
     ) -> Outcome {
         let p0 = &self.points[i];
         let m = (q.point - p0).norm() + delta;
@@ -304,15 +309,14 @@ impl Neighbourhoods {
         let b = best.map_or(f64::INFINITY, |b| b.closest.distance);
         let certified = (b < limit || max2.sqrt() < limit)
             && best.is_none_or(|b| !is_degenerate(&surface.corners(b.facet, positions)));
-        let outcome = if certified {
-            Ok(best.filter(|b| b.d2 <= max2).map(|b| Hit {
-                facet: b.facet,
-                closest: b.closest,
-            }))
-        } else {
-            Err(best.map(|b| b.facet))
-        };
-        (outcome, measured)
+        if !certified {
+            return (Err(best.map(|b| b.facet)), measured);
+        }
+        *hit = best.filter(|b| b.d2 <= max2).map(|b| Hit {
+            facet: b.facet,
+            closest: b.closest,
+        });
+        (Ok(()), measured)
     }
 }
 
