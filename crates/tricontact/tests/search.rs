@@ -598,3 +598,49 @@ fn packets_survive_non_finite_queries() {
         }
     }
 }
+
+/// A large batch in random order is answered in Z-order and put back: the same answers as the
+/// batch in surface order, as single queries and as brute force, with self-exclusion and a search
+/// distance, for any thread count.
+#[test]
+fn shuffled_batches_give_the_same_answers() {
+    let (nodes, facets) = torus(80, 40, 2.0, 0.6);
+    let h = std::f64::consts::TAU * 0.6 / 40.0;
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    // Queries at the nodes (excluding their own facets), then near the surface.
+    let mut queries: Vec<Query> = (0..nodes.len() as u32)
+        .map(|n| Query {
+            point: nodes[n as usize] + Vec3::new(0.0, 0.0, 0.3 * h),
+            exclude: Some(n),
+        })
+        .collect();
+    queries.extend(near_surface(&nodes, &surface, 5, h));
+    let mut r = scenes::uniform(21);
+    let mut order: Vec<usize> = (0..queries.len()).collect();
+    for i in (1..order.len()).rev() {
+        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+        let j = ((r() * (i + 1) as f64) as usize).min(i);
+        order.swap(i, j);
+    }
+    let shuffled: Vec<Query> = order.iter().map(|&i| queries[i]).collect();
+    for max in [f64::INFINITY, 0.5 * h] {
+        let ordered = bvh.closest_all(&surface, &queries, max);
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| bvh.closest_all(&surface, &shuffled, max))
+        };
+        let answers = run(1);
+        assert_eq!(answers, run(2));
+        for (k, &i) in order.iter().enumerate() {
+            assert_eq!(answers[k], ordered[i], "query {i}");
+        }
+        for (q, hit) in shuffled.iter().zip(&answers).step_by(37) {
+            same(*hit, bvh.closest(&surface, q, max)).unwrap();
+            same(*hit, brute_force_closest(&surface, &nodes, q, max)).unwrap();
+        }
+    }
+}

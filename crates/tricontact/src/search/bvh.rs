@@ -60,6 +60,8 @@ pub struct Bvh {
     pub(crate) degenerate: Vec<bool>,
     /// Entries a query's traversal stack may need: three siblings left per level, plus one.
     pub(crate) stack_size: usize,
+    /// The mean diagonal of the leaf boxes: the length below which consecutive queries are near.
+    pub(crate) leaf_size: f64,
     inflation: f64,
     built_area: f64,
 }
@@ -122,6 +124,7 @@ impl Bvh {
             slot,
             degenerate,
             stack_size,
+            leaf_size: 0.0,
             inflation,
             built_area: 0.0,
         };
@@ -187,8 +190,38 @@ impl Bvh {
             inflation,
             ..
         } = self;
-        sweep_subtree(nodes, 0, *root, corners, *inflation).1
+        let area = sweep_subtree(nodes, 0, *root, corners, *inflation).1;
+        self.leaf_size = mean_leaf_diagonal(&self.nodes);
+        area
     }
+
+    /// The box of the whole tree (`None` for a tree that is a single leaf, which has none stored).
+    pub(crate) fn bounds(&self) -> Option<Aabb> {
+        if as_leaf(self.root).is_some() {
+            return None;
+        }
+        let node = &self.nodes[self.root as usize];
+        Some((0..WIDTH).fold(Aabb::EMPTY, |b, k| b.union(&node.child_box(k))))
+    }
+}
+
+/// The mean diagonal of the leaf boxes of `nodes` (zero for a tree that is a single leaf).
+fn mean_leaf_diagonal(nodes: &[Node]) -> f64 {
+    let (sum, count) = nodes
+        .par_iter()
+        .with_min_len(4096)
+        .map(|node| {
+            (0..WIDTH)
+                .filter(|&k| matches!(as_leaf(node.child[k]), Some((_, c)) if c > 0))
+                .fold((0.0, 0usize), |(s, n), k| {
+                    let b = node.child_box(k);
+                    (s + (b.max - b.min).norm(), n + 1)
+                })
+        })
+        .reduce(|| (0.0, 0), |(s1, n1), (s2, n2)| (s1 + s2, n1 + n2));
+    #[allow(clippy::cast_precision_loss)]
+    let mean = if count == 0 { 0.0 } else { sum / count as f64 };
+    mean
 }
 
 /// The box of the leaf `corners[first..first + count]`.

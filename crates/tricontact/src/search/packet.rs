@@ -25,6 +25,14 @@
 //! query's answer is not certified that way (it is farther than `R`), the query falls back to the
 //! full traversal, seeded with what it found.
 //!
+//! # Batches in no particular order
+//! A batch of at least [`REORDER_MIN`] queries whose consecutive queries are far apart (the median
+//! step over evenly spaced samples above eight mean leaf diagonals) is answered in the Z-order of
+//! its points and the answers put back in place: on the 10⁶-facet torus, shuffled queries went
+//! from 0.41 to 1.2 M/s per core. Forcing the Z-order on a batch already in surface order made it
+//! 1.4–1.7× slower (sorting, copies, and Z-order packets are less compact than rows along the
+//! surface), hence the test.
+//!
 //! # Radius and fallbacks
 //! `R` follows the data: 1.25 times the largest answer distance of the previous packet, capped by
 //! the search distance (with a finite search distance `R` never needs to exceed it: answers beyond
@@ -36,13 +44,16 @@
 
 use std::cell::RefCell;
 
+use rayon::prelude::*;
+
 use wide::f64x4;
 
 use crate::linalg::Vec3;
 use crate::search::aabb::Aabb;
 use crate::search::bvh::{Bvh, index};
+use crate::search::morton::morton_code;
 use crate::search::node::{Child, as_leaf};
-use crate::search::query::{Candidate, Hit, Query, TIE_MARGIN};
+use crate::search::query::{Candidate, HINT_CHUNK, Hit, Query, TIE_MARGIN};
 use crate::search::surface::Surface;
 
 /// Queries per packet.
@@ -56,6 +67,16 @@ const SPREAD: f64 = 8.0;
 
 /// Growth of the gathering radius over the previous packet's largest answer distance.
 const RADIUS_FACTOR: f64 = 1.25;
+
+/// Batches smaller than this are answered in the order given.
+const REORDER_MIN: usize = 4 * HINT_CHUNK;
+
+/// Consecutive query pairs sampled to judge a batch's order.
+const ORDER_SAMPLES: usize = 255;
+
+/// A batch whose median step between consecutive queries exceeds this many leaf sizes is answered
+/// in Z-order.
+const ORDER_SPREAD: f64 = 8.0;
 
 /// The leaves gathered for a packet: boxes axis by axis, and leaf references (fixed capacity,
 /// [`MAX_LEAVES`], so a gathering allocates nothing).
@@ -293,5 +314,83 @@ impl Bvh {
             *hit = best.map(|c| self.finish(c, q));
             *hint = hit.map(|h| h.facet).or(*hint);
         }
+    }
+
+    /// `false` for a batch worth answering in Z-order: large, and with a median distance between
+    /// consecutive queries (on evenly spaced samples) above [`ORDER_SPREAD`] leaf sizes.
+    pub(crate) fn coherent(&self, queries: &[Query]) -> bool {
+        let n = queries.len();
+        if n < REORDER_MIN || self.leaf_size.is_nan() || self.leaf_size <= 0.0 {
+            return true;
+        }
+        let mut steps: Vec<f64> = (0..ORDER_SAMPLES)
+            .map(|s| {
+                let i = s * (n - 1) / ORDER_SAMPLES;
+                (queries[i + 1].point - queries[i].point).norm()
+            })
+            .collect();
+        steps.sort_by(f64::total_cmp);
+        steps[ORDER_SAMPLES / 2] <= ORDER_SPREAD * self.leaf_size
+    }
+
+    /// Answers `queries` in the Z-order of their points (Morton codes on the tree's box, ties by
+    /// index, so the order is deterministic) and writes each answer to its query's place in `out`.
+    /// Every answer is the one the given order would give; only the packets differ.
+    pub(crate) fn closest_reordered(
+        &self,
+        surface: &Surface,
+        queries: &[Query],
+        max2: f64,
+        out: &mut [Option<Hit>],
+    ) {
+        let bounds = self.bounds().unwrap_or(Aabb::EMPTY);
+        let mut keys: Vec<(u64, u32)> = queries
+            .par_iter()
+            .enumerate()
+            .map(|(i, q)| (morton_code(&q.point, &bounds), index(i)))
+            .collect();
+        keys.par_sort_unstable();
+        let sorted: Vec<Query> = keys.par_iter().map(|&(_, i)| queries[i as usize]).collect();
+        let mut answers = vec![None; queries.len()];
+        answers
+            .par_chunks_mut(HINT_CHUNK)
+            .zip(sorted.par_chunks(HINT_CHUNK))
+            .for_each(|(hits, qs)| self.closest_chunk(surface, qs, hits, max2));
+        let mut rank = vec![0u32; queries.len()];
+        for (k, &(_, i)) in keys.iter().enumerate() {
+            rank[i as usize] = index(k);
+        }
+        out.par_iter_mut()
+            .zip(rank.par_iter())
+            .with_min_len(4096)
+            .for_each(|(hit, &k)| *hit = answers[k as usize]);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::search::scenes::{near_surface, torus, uniform};
+
+    #[test]
+    fn surface_order_is_coherent_and_a_shuffle_is_not() {
+        let (nodes, facets) = torus(80, 40, 2.0, 0.6);
+        let surface = Surface::new(facets.clone(), nodes.len()).unwrap();
+        let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+        let mut queries: Vec<Query> = near_surface(&nodes, &facets, 0.1, 3)
+            .into_iter()
+            .map(Query::point)
+            .collect();
+        assert!(bvh.coherent(&queries));
+        // Too small a batch is never reordered.
+        assert!(bvh.coherent(&queries[..REORDER_MIN - 1]));
+        let mut r = uniform(8);
+        for i in (1..queries.len()).rev() {
+            #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+            let j = ((r() * (i + 1) as f64) as usize).min(i);
+            queries.swap(i, j);
+        }
+        assert!(!bvh.coherent(&queries));
+        assert!(bvh.coherent(&queries[..REORDER_MIN - 1]));
     }
 }

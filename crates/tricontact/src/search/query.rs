@@ -309,7 +309,9 @@ impl Bvh {
     /// The queries are cut into chunks of [`HINT_CHUNK`]; within a chunk, packets of consecutive
     /// queries share one traversal ([`crate::search::packet`]) and each query is hinted with the
     /// previous answer ([`Bvh::closest_with_hint`]). This speeds up a spatially coherent batch
-    /// (neighbouring nodes one after the other) and leaves every answer unchanged.
+    /// (neighbouring nodes one after the other) and leaves every answer unchanged. A large batch
+    /// whose consecutive queries are far apart is answered in Z-order and the answers put back in
+    /// the given order.
     #[must_use]
     pub fn closest_all(
         &self,
@@ -349,6 +351,10 @@ impl Bvh {
         out: &mut [Option<Hit>],
     ) {
         let max2 = max_distance * max_distance;
+        if !self.coherent(queries) {
+            self.closest_reordered(surface, queries, max2, out);
+            return;
+        }
         out.par_chunks_mut(HINT_CHUNK)
             .zip(queries.par_chunks(HINT_CHUNK))
             .for_each(|(hits, qs)| self.closest_chunk(surface, qs, hits, max2));
