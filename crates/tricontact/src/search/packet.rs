@@ -26,9 +26,9 @@
 //! full traversal, seeded with what it found.
 //!
 //! # Batches in no particular order
-//! A batch of at least 4096 queries (`REORDER_MIN`) whose consecutive queries are far apart (the median
-//! step over evenly spaced samples above eight mean leaf diagonals) is answered in the Z-order of
-//! its points and the answers put back in place: on the 10⁶-facet torus, shuffled queries went
+//! A batch of at least 4096 queries (`REORDER_MIN`) whose consecutive queries are far apart (the
+//! median step over evenly spaced samples above eight mean leaf diagonals) is answered in the
+//! Z-order of its points and the answers put back in place: on the 10⁶-facet torus, shuffled queries went
 //! from 0.41 to 1.2 M/s per core. Forcing the Z-order on a batch already in surface order made it
 //! 1.4–1.7× slower (sorting, copies, and Z-order packets are less compact than rows along the
 //! surface), hence the test.
