@@ -643,4 +643,16 @@ fn shuffled_batches_give_the_same_answers() {
             same(*hit, brute_force_closest(&surface, &nodes, q, max)).unwrap();
         }
     }
+    // Points at NaN or infinity in a shuffled batch: no panic, and the other answers unchanged.
+    let mut odd = shuffled.clone();
+    odd[10].point.x = f64::NAN;
+    odd[20].point.y = f64::INFINITY;
+    odd[30].point = Vec3::new(f64::NEG_INFINITY, 1.0, f64::NAN);
+    let answers = bvh.closest_all(&surface, &odd, f64::INFINITY);
+    let reference = bvh.closest_all(&surface, &shuffled, f64::INFINITY);
+    for (k, (a, b)) in answers.iter().zip(&reference).enumerate() {
+        if ![10, 20, 30].contains(&k) {
+            assert_eq!(a, b, "query {k}");
+        }
+    }
 }
