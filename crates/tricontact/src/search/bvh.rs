@@ -180,8 +180,8 @@ impl Bvh {
     }
 
     /// Fills every child box bottom-up from the corner copies (leaf boxes inflated by the search
-    /// distance), in parallel over subtrees; returns the refit-quality measure (sum of the
-    /// children's half-areas).
+    /// distance), in parallel over subtrees, and the mean leaf diagonal; returns the refit-quality
+    /// measure (sum of the children's half-areas).
     fn sweep(&mut self) -> f64 {
         let Self {
             nodes,
@@ -190,9 +190,9 @@ impl Bvh {
             inflation,
             ..
         } = self;
-        let area = sweep_subtree(nodes, 0, *root, corners, *inflation).1;
-        self.leaf_size = mean_leaf_diagonal(&self.nodes);
-        area
+        let measure = sweep_subtree(nodes, 0, *root, corners, *inflation).1;
+        self.leaf_size = measure.mean_diagonal();
+        measure.area
     }
 
     /// The box of the whole tree (`None` for a tree that is a single leaf, which has none stored).
@@ -205,23 +205,43 @@ impl Bvh {
     }
 }
 
-/// The mean diagonal of the leaf boxes of `nodes` (zero for a tree that is a single leaf).
-fn mean_leaf_diagonal(nodes: &[Node]) -> f64 {
-    let (sum, count) = nodes
-        .par_iter()
-        .with_min_len(4096)
-        .map(|node| {
-            (0..WIDTH)
-                .filter(|&k| matches!(as_leaf(node.child[k]), Some((_, c)) if c > 0))
-                .fold((0.0, 0usize), |(s, n), k| {
-                    let b = node.child_box(k);
-                    (s + (b.max - b.min).norm(), n + 1)
-                })
-        })
-        .reduce(|| (0.0, 0), |(s1, n1), (s2, n2)| (s1 + s2, n1 + n2));
-    #[allow(clippy::cast_precision_loss)]
-    let mean = if count == 0 { 0.0 } else { sum / count as f64 };
-    mean
+/// What a sweep adds up: the refit-quality measure (the children's half-areas) and the leaf
+/// boxes' diagonals, with their number.
+#[derive(Debug, Clone, Copy, Default)]
+struct Measure {
+    area: f64,
+    diagonals: f64,
+    leaves: usize,
+}
+
+impl Measure {
+    /// The measure with one more child box `b`, a leaf's or not.
+    fn with_box(self, b: &Aabb, leaf: bool) -> Measure {
+        Measure {
+            area: self.area + b.half_area(),
+            diagonals: self.diagonals + if leaf { (b.max - b.min).norm() } else { 0.0 },
+            leaves: self.leaves + usize::from(leaf),
+        }
+    }
+
+    fn plus(self, other: Measure) -> Measure {
+        Measure {
+            area: self.area + other.area,
+            diagonals: self.diagonals + other.diagonals,
+            leaves: self.leaves + other.leaves,
+        }
+    }
+
+    /// The mean leaf diagonal (zero without leaves).
+    fn mean_diagonal(&self) -> f64 {
+        #[allow(clippy::cast_precision_loss)]
+        let mean = if self.leaves == 0 {
+            0.0
+        } else {
+            self.diagonals / self.leaves as f64
+        };
+        mean
+    }
 }
 
 /// The box of the leaf `corners[first..first + count]`.
@@ -233,19 +253,22 @@ fn leaf_box(corners: &[[Vec3; 3]], first: usize, count: usize, inflation: f64) -
 }
 
 /// Sweeps the subtree rooted at `child`, whose internal nodes are `nodes` (global indices from
-/// `base`, depth-first, so every subtree is a contiguous run); returns its box and area measure.
+/// `base`, depth-first, so every subtree is a contiguous run); returns its box and measure.
 fn sweep_subtree(
     nodes: &mut [Node],
     base: usize,
     child: Child,
     corners: &[[Vec3; 3]],
     inflation: f64,
-) -> (Aabb, f64) {
+) -> (Aabb, Measure) {
     if let Some((first, count)) = as_leaf(child) {
         if count == 0 {
-            return (Aabb::EMPTY, 0.0);
+            return (Aabb::EMPTY, Measure::default());
         }
-        return (leaf_box(corners, first, count, inflation), 0.0);
+        return (
+            leaf_box(corners, first, count, inflation),
+            Measure::default(),
+        );
     }
     debug_assert_eq!(child as usize, base);
     let (head, mut rest) = nodes.split_at_mut(1);
@@ -264,27 +287,27 @@ fn sweep_subtree(
         start = end;
     }
     let parallel = nodes_len(&runs) > 2048;
-    let swept: Vec<(usize, Aabb, f64)> = if parallel {
+    let swept: Vec<(usize, Aabb, Measure)> = if parallel {
         runs.into_par_iter()
             .map(|(k, run, b)| {
-                let (bx, a) = sweep_subtree(run, b, refs[k], corners, inflation);
-                (k, bx, a)
+                let (bx, m) = sweep_subtree(run, b, refs[k], corners, inflation);
+                (k, bx, m)
             })
             .collect()
     } else {
         runs.into_iter()
             .map(|(k, run, b)| {
-                let (bx, a) = sweep_subtree(run, b, refs[k], corners, inflation);
-                (k, bx, a)
+                let (bx, m) = sweep_subtree(run, b, refs[k], corners, inflation);
+                (k, bx, m)
             })
             .collect()
     };
     let mut total = Aabb::EMPTY;
-    let mut area = 0.0;
-    for (k, bx, a) in swept {
+    let mut measure = Measure::default();
+    for (k, bx, m) in swept {
         head[0].set_child_box(k, &bx);
         total = total.union(&bx);
-        area += a + bx.half_area();
+        measure = measure.plus(m).with_box(&bx, false);
     }
     for (k, &c) in refs.iter().enumerate() {
         if let Some((first, count)) = as_leaf(c)
@@ -293,10 +316,10 @@ fn sweep_subtree(
             let bx = leaf_box(corners, first, count, inflation);
             head[0].set_child_box(k, &bx);
             total = total.union(&bx);
-            area += bx.half_area();
+            measure = measure.with_box(&bx, true);
         }
     }
-    (total, area)
+    (total, measure)
 }
 
 fn nodes_len(runs: &[(usize, &mut [Node], usize)]) -> usize {

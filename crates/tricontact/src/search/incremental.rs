@@ -46,7 +46,7 @@ use crate::linalg::Vec3;
 use crate::search::bvh::{Bvh, Update};
 use crate::search::lanes;
 use crate::search::node::{as_leaf, round_down};
-use crate::search::query::{HINT_CHUNK, TIE_MARGIN, farthest_first};
+use crate::search::query::{HINT_CHUNK, TIE_MARGIN, check_answers, farthest_first};
 use crate::search::query::{Hit, Query};
 use crate::search::surface::{Surface, SurfaceError};
 
@@ -214,7 +214,7 @@ impl Neighbourhoods {
                 given: queries.len(),
             });
         }
-        Surface::check_answers(queries.len(), hits.len())?;
+        check_answers(queries.len(), hits.len())?;
         let delta = self.motion(positions);
         let valid: Vec<u32> = self
             .degenerate

@@ -337,7 +337,7 @@ impl Bvh {
         max_distance: f64,
         out: &mut [Option<Hit>],
     ) -> Result<(), SurfaceError> {
-        Surface::check_answers(queries.len(), out.len())?;
+        check_answers(queries.len(), out.len())?;
         self.answer_all(surface, queries, max_distance, out);
         Ok(())
     }
@@ -359,6 +359,17 @@ impl Bvh {
             .zip(queries.par_chunks(HINT_CHUNK))
             .for_each(|(hits, qs)| self.closest_chunk(surface, qs, hits, max2));
     }
+}
+
+/// Checks that an answer buffer has one entry per query.
+///
+/// # Errors
+/// [`SurfaceError::AnswerCount`] when it does not.
+pub(crate) fn check_answers(queries: usize, answers: usize) -> Result<(), SurfaceError> {
+    if answers != queries {
+        return Err(SurfaceError::AnswerCount { queries, answers });
+    }
+    Ok(())
 }
 
 /// The four `(distance, child)` pairs sorted by decreasing distance (a five-exchange sorting

@@ -147,17 +147,6 @@ impl Surface {
         Ok(())
     }
 
-    /// Checks that an answer buffer has one entry per query.
-    ///
-    /// # Errors
-    /// [`SurfaceError::AnswerCount`] when it does not.
-    pub(crate) fn check_answers(queries: usize, answers: usize) -> Result<(), SurfaceError> {
-        if answers != queries {
-            return Err(SurfaceError::AnswerCount { queries, answers });
-        }
-        Ok(())
-    }
-
     /// The three node positions of `facet`.
     #[must_use]
     #[inline]
