@@ -10,9 +10,8 @@
 //! to ±2 element sizes along its normal. "Coherent" queries come in facet order (neighbours in
 //! space are neighbours in the list); "random" queries are shuffled. Per-core figures are the CPU
 //! time of a one-thread pool (so they hold on a shared machine), the best of three batches of at
-//! least 0.3 s; brute force is timed on a subset
-//! of queries and its ratio is per query (measured per query on the subset, not extrapolated
-//! from a model). Two-thread figures are wall-clock. Answers (ours and parry's) are written into
+//! least 0.3 s; brute force is timed on a subset of queries and its ratio is per query (measured
+//! per query on the subset, not extrapolated from a model). Two-thread figures are wall-clock. Answers (ours and parry's) are written into
 //! buffers made once, as a solver searching at every iteration would: allocating a fresh buffer
 //! of 10⁶ answers costs about 50 ns per answer in page faults, as much as a search.
 //!
@@ -65,8 +64,8 @@ fn time<T>(reps: usize, mut f: impl FnMut() -> T) -> (f64, T) {
 
 /// CPU time of the calling thread in seconds (`/proc/thread-self/schedstat`), `None` where the
 /// kernel does not provide it. The thread yields first: the kernel brings a running thread's count
-/// up to date when it is scheduled, and a thread that has run uninterrupted may otherwise read a
-/// stale count (two 10⁶-query timings once read 25 % high, to the same 10 µs).
+/// up to date when it is scheduled, and a thread that has run uninterrupted reads a count up to a
+/// scheduler tick old (measured: about 1 ms without the yield, exact with it).
 fn thread_cpu_time() -> Option<f64> {
     std::thread::yield_now();
     let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
@@ -284,10 +283,12 @@ fn incremental(
                 .expect("one answer per query");
         });
         let full = buffer.lock().expect("buffer").clone();
-        // A fallback updates the tree (each call: the update refits it again).
+        // A fallback updates the tree (each call: the update refits it again). A buffer of its own,
+        // starting empty, so an answer the incremental search failed to write would show below.
         let stale = Mutex::new(bvh.clone());
+        let own = Mutex::new(vec![None; queries.len()]);
         let (t_inc, stats) = time_one_core(3, || {
-            let mut out = buffer.lock().expect("buffer");
+            let mut out = own.lock().expect("buffer");
             lists
                 .closest_all_into(
                     &mut stale.lock().expect("tree"),
@@ -299,7 +300,7 @@ fn incremental(
                 )
                 .expect("incremental")
         });
-        let answers = buffer.lock().expect("buffer").clone();
+        let answers = own.into_inner().expect("buffer");
         let mismatches = answers.iter().zip(&full).filter(|(a, b)| a != b).count();
         let changed = hits
             .iter()
