@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use crate::error::{FemError, Result};
+use crate::vtu::VtuFormat;
 
 /// A whole model file.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
@@ -257,6 +258,9 @@ pub struct OutputDef {
     /// Write a `.vtu` every `every`-th increment (the last of each step always).
     #[serde(default = "one")]
     pub every: usize,
+    /// Encoding of the `.vtu` data arrays.
+    #[serde(default)]
+    pub vtu_format: VtuFormat,
     /// Write PNG plots (Newton residuals, contact force, Hertz comparison) at the end of the run.
     #[serde(default)]
     pub plots: bool,
@@ -306,6 +310,7 @@ impl Default for OutputDef {
             vtu: true,
             history: true,
             every: 1,
+            vtu_format: VtuFormat::default(),
             plots: false,
         }
     }
@@ -432,7 +437,23 @@ nlgeom = true
         assert_eq!(m.steps[0].max_iterations, 20);
         assert!(m.steps[0].nlgeom);
         assert!(m.output.vtu);
+        assert_eq!(m.output.vtu_format, VtuFormat::Binary);
         assert_eq!(m.step_name(0), "step-1");
+    }
+
+    #[test]
+    fn vtu_format_is_ascii_or_binary() {
+        let with = |v: &str| format!("{GOOD}[output]\nvtu_format = \"{v}\"\n");
+        let m = Model::parse(&with("ascii"), Path::new("m.toml")).expect("valid");
+        assert_eq!(m.output.vtu_format, VtuFormat::Ascii);
+        let m = Model::parse(&with("binary"), Path::new("m.toml")).expect("valid");
+        assert_eq!(m.output.vtu_format, VtuFormat::Binary);
+        let e = Model::parse(&with("base64"), Path::new("m.toml")).expect_err("bad value");
+        let msg = e.to_string();
+        assert!(
+            msg.contains("base64") && msg.contains("ascii") && msg.contains("line"),
+            "{msg}"
+        );
     }
 
     #[test]

@@ -208,7 +208,8 @@ impl ResultWriter {
                     },
                 ],
             };
-            let xml = vtu_string(&grid).map_err(|e| FemError::Output(e.to_string()))?;
+            let xml = vtu_string(&grid, an.output.vtu_format)
+                .map_err(|e| FemError::Output(e.to_string()))?;
             let path = self.dir.join(&name);
             write_atomic(&path, xml.as_bytes())?;
             self.written.push(path);

@@ -3,18 +3,31 @@
 //! Library choice: a small writer on `quick-xml` rather than `vtkio`.
 //! `vtkio` 0.7 exists only as a release candidate, pulls a larger
 //! dependency tree and needs our arrays copied into its own model; the VTU
-//! subset we need (points, cells, point/cell data as ASCII `DataArray`s) is
-//! ~100 lines, with escaping and well-formedness handled by `quick-xml`.
+//! subset we need (points, cells, point/cell data `DataArray`s) is ~150
+//! lines, with escaping and well-formedness handled by `quick-xml` and the
+//! base64 of binary arrays by `base64`.
+//!
+//! Data arrays are written in one of two [`VtuFormat`]s: `binary` (default)
+//! is VTK's inline binary — per array, the base64 of the byte count as a
+//! `UInt64`, then the base64 of the little-endian values (two blocks, as
+//! VTK's own writer encodes them; `header_type="UInt64"`); `ascii` is
+//! decimal text in Rust's shortest round-trip form. Both are exact. On the
+//! 45³ hex8 cube of `fem-bench --vtu` (97 336 nodes), binary is 0.64 of the
+//! size and 6× faster to encode; VTK 9.7's XML reader (ParaView's), timed
+//! once from Python, loaded it 3× faster (0.25 against 0.80 s), and it and
+//! meshio 5.3 read arrays identical to the ASCII file's.
 //!
 //! Cell types: tet4 = 10, tet10 = 24 (Gmsh nodes 8 and 9 swapped into VTK
 //! order), hex8 = 12. Symmetric tensors are written with 6 components in
-//! ParaView's order `XX, YY, ZZ, XY, YZ, XZ`. Numbers use Rust's shortest
-//! round-trip formatting, so values are exact.
+//! ParaView's order `XX, YY, ZZ, XY, YZ, XZ`.
 
 use std::fmt::Write as _;
 
+use base64::Engine as _;
+use base64::engine::general_purpose::STANDARD;
 use quick_xml::Writer;
 use quick_xml::events::BytesText;
+use serde::Deserialize;
 
 use crate::mesh::ElementKind;
 
@@ -59,31 +72,91 @@ pub struct Grid<'a> {
     pub cell_data: Vec<Field<'a>>,
 }
 
-fn join<T: std::fmt::Display>(it: impl Iterator<Item = T>) -> String {
+/// How the data arrays of a `.vtu` are written (`[output] vtu_format`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum VtuFormat {
+    /// Decimal text, shortest round-trip form: readable and diffable, but about 1.6× the size,
+    /// 6× slower to write and 3× slower for VTK to read (`fem-bench --vtu`).
+    Ascii,
+    /// VTK's inline `binary` (the default): little-endian values, base64 encoded after a
+    /// `UInt64` byte count.
+    #[default]
+    Binary,
+}
+
+/// A value type of a VTK data array.
+trait Scalar: std::fmt::Display + Copy {
+    /// Its VTK type name.
+    const VTK: &'static str;
+    /// Appends its little-endian bytes.
+    fn extend_le(self, out: &mut Vec<u8>);
+}
+
+impl Scalar for f64 {
+    const VTK: &'static str = "Float64";
+    fn extend_le(self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.to_le_bytes());
+    }
+}
+
+impl Scalar for i64 {
+    const VTK: &'static str = "Int64";
+    fn extend_le(self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.to_le_bytes());
+    }
+}
+
+impl Scalar for u8 {
+    const VTK: &'static str = "UInt8";
+    fn extend_le(self, out: &mut Vec<u8>) {
+        out.push(self);
+    }
+}
+
+/// The text of a data array: values separated by spaces, or base64 of the byte count (`UInt64`)
+/// followed by base64 of the bytes — two blocks, as VTK's own writer encodes them.
+fn encode<T: Scalar>(values: impl Iterator<Item = T>, format: VtuFormat) -> String {
     let mut s = String::new();
-    for (i, v) in it.enumerate() {
-        if i > 0 {
-            s.push(' ');
+    match format {
+        VtuFormat::Ascii => {
+            for (i, v) in values.enumerate() {
+                if i > 0 {
+                    s.push(' ');
+                }
+                let _ = write!(s, "{v}");
+            }
         }
-        let _ = write!(s, "{v}");
+        VtuFormat::Binary => {
+            let mut bytes = Vec::new();
+            for v in values {
+                v.extend_le(&mut bytes);
+            }
+            let count = u64::try_from(bytes.len()).unwrap_or(u64::MAX);
+            STANDARD.encode_string(count.to_le_bytes(), &mut s);
+            STANDARD.encode_string(&bytes, &mut s);
+        }
     }
     s
 }
 
-fn data_array<W: std::io::Write>(
+fn data_array<W: std::io::Write, T: Scalar>(
     w: &mut Writer<W>,
-    ty: &str,
-    name: &str,
-    components: usize,
-    text: &str,
+    (name, components): (&str, usize),
+    values: impl Iterator<Item = T>,
+    format: VtuFormat,
 ) -> std::io::Result<()> {
     let comps = components.to_string();
-    let mut el = w.create_element("DataArray").with_attribute(("type", ty));
-    if !name.is_empty() {
-        el = el.with_attribute(("Name", name));
-    }
-    el.with_attribute(("NumberOfComponents", comps.as_str()))
-        .with_attribute(("format", "ascii"))
+    let text = encode(values, format);
+    let format = match format {
+        VtuFormat::Ascii => "ascii",
+        VtuFormat::Binary => "binary",
+    };
+    w.create_element("DataArray")
+        .with_attribute(("type", T::VTK))
+        .with_attribute(("Name", name))
+        .with_attribute(("NumberOfComponents", comps.as_str()))
+        .with_attribute(("format", format))
         .write_text_content(BytesText::from_escaped(text))?;
     Ok(())
 }
@@ -93,27 +166,29 @@ fn fields<W: std::io::Write>(
     w: &mut Writer<W>,
     tag: &str,
     list: &[Field<'_>],
+    format: VtuFormat,
 ) -> std::io::Result<()> {
     w.create_element(tag).write_inner_content(|w| {
         for f in list {
-            data_array(w, "Float64", f.name, f.components, &join(f.values.iter()))?;
+            data_array(w, (f.name, f.components), f.values.iter().copied(), format)?;
         }
         Ok(())
     })?;
     Ok(())
 }
 
-/// Serializes a grid as VTU XML.
+/// Serializes a grid as VTU XML, its data arrays in `format`.
 ///
 /// # Errors
 /// Only from the in-memory writer (practically none).
-pub fn vtu_string(g: &Grid<'_>) -> std::io::Result<String> {
+pub fn vtu_string(g: &Grid<'_>, format: VtuFormat) -> std::io::Result<String> {
     let mut w = Writer::new_with_indent(Vec::new(), b' ', 1);
     w.write_event(quick_xml::events::Event::Decl(
         quick_xml::events::BytesDecl::new("1.0", None, None),
     ))?;
     let npts = g.points.len().to_string();
     let ncells = g.cells.len().to_string();
+    let int = |v: usize| i64::try_from(v).unwrap_or(i64::MAX);
     w.create_element("VTKFile")
         .with_attribute(("type", "UnstructuredGrid"))
         .with_attribute(("version", "1.0"))
@@ -127,38 +202,21 @@ pub fn vtu_string(g: &Grid<'_>) -> std::io::Result<String> {
                         .with_attribute(("NumberOfCells", ncells.as_str()))
                         .write_inner_content(|w| {
                             w.create_element("Points").write_inner_content(|w| {
-                                data_array(
-                                    w,
-                                    "Float64",
-                                    "Points",
-                                    3,
-                                    &join(g.points.iter().flatten()),
-                                )
+                                let xyz = g.points.iter().flatten().copied();
+                                data_array(w, ("Points", 3), xyz, format)
                             })?;
                             w.create_element("Cells").write_inner_content(|w| {
-                                data_array(
-                                    w,
-                                    "Int64",
-                                    "connectivity",
-                                    1,
-                                    &join(g.cells.iter().flat_map(|c| c.1.iter())),
-                                )?;
-                                let mut off = 0usize;
-                                let offsets = join(g.cells.iter().map(|c| {
-                                    off += c.1.len();
-                                    off
-                                }));
-                                data_array(w, "Int64", "offsets", 1, &offsets)?;
-                                data_array(
-                                    w,
-                                    "UInt8",
-                                    "types",
-                                    1,
-                                    &join(g.cells.iter().map(|c| c.0)),
-                                )
+                                let nodes = g.cells.iter().flat_map(|c| c.1.iter());
+                                data_array(w, ("connectivity", 1), nodes.map(|&v| int(v)), format)?;
+                                let offsets = g.cells.iter().scan(0usize, |off, c| {
+                                    *off += c.1.len();
+                                    Some(int(*off))
+                                });
+                                data_array(w, ("offsets", 1), offsets, format)?;
+                                data_array(w, ("types", 1), g.cells.iter().map(|c| c.0), format)
                             })?;
-                            fields(w, "PointData", &g.point_data)?;
-                            fields(w, "CellData", &g.cell_data)?;
+                            fields(w, "PointData", &g.point_data, format)?;
+                            fields(w, "CellData", &g.cell_data, format)?;
                             Ok(())
                         })?;
                     Ok(())
@@ -221,7 +279,7 @@ mod tests {
             }],
             cell_data: vec![],
         };
-        let s = vtu_string(&g).expect("xml");
+        let s = vtu_string(&g, VtuFormat::Ascii).expect("xml");
         assert!(s.contains("NumberOfPoints=\"4\""));
         assert!(s.contains("NumberOfCells=\"1\""));
         assert!(s.contains("Name=\"displacement\""));
@@ -230,6 +288,118 @@ mod tests {
         let p = pvd_string(&[(0.5, "a.vtu".into())]).expect("xml");
         assert!(p.contains("timestep=\"0.5\""));
         assert!(p.contains("file=\"a.vtu\""));
+    }
+
+    /// The `(Name, type, format, text)` of every data array of a `.vtu` written here (attributes
+    /// in double quotes, text between the tags).
+    fn arrays(xml: &str) -> Vec<(String, String, String, String)> {
+        let attr = |tag: &str, key: &str| {
+            let start = tag.find(&format!(" {key}=\"")).expect(key) + key.len() + 3;
+            tag[start..]
+                .split('"')
+                .next()
+                .expect("closing quote")
+                .to_string()
+        };
+        xml.split("<DataArray")
+            .skip(1)
+            .map(|rest| {
+                let (tag, rest) = rest.split_once('>').expect("tag end");
+                let (text, _) = rest.split_once("</DataArray>").expect("end tag");
+                let name = attr(tag, "Name");
+                (
+                    name,
+                    attr(tag, "type"),
+                    attr(tag, "format"),
+                    text.trim().to_string(),
+                )
+            })
+            .collect()
+    }
+
+    /// Decodes a binary array: two base64 blocks, the `UInt64` byte count and the bytes.
+    fn decode(text: &str) -> Vec<u8> {
+        let header = STANDARD.decode(&text[..12]).expect("header block");
+        let count = u64::from_le_bytes(header.try_into().expect("8 bytes"));
+        let bytes = STANDARD.decode(&text[12..]).expect("data block");
+        assert_eq!(bytes.len() as u64, count, "byte count");
+        bytes
+    }
+
+    #[test]
+    fn binary_arrays_hold_the_ascii_values_bit_for_bit() {
+        let pts = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [1.0, 1.0, 1.0],
+        ];
+        let cells = vec![
+            vtk_cell(ElementKind::Tet4, &[0, 1, 2, 3]),
+            vtk_cell(ElementKind::Tri3, &[1, 2, 4]),
+        ];
+        // Values whose decimal and binary forms could disagree if either were lossy.
+        let s: Vec<f64> = (0..15)
+            .map(|i| (f64::from(i) * 0.1).sin() * 1e-7 + 1.0 / 3.0)
+            .chain([f64::MIN_POSITIVE, -0.0, 1e300, -2.5e-310, 0.1])
+            .collect();
+        let grid = Grid {
+            points: &pts,
+            cells: &cells,
+            point_data: vec![Field {
+                name: "s",
+                components: 4,
+                values: &s,
+            }],
+            cell_data: vec![Field {
+                name: "c",
+                components: 1,
+                values: &s[..2],
+            }],
+        };
+        let ascii = arrays(&vtu_string(&grid, VtuFormat::Ascii).expect("xml"));
+        let binary = arrays(&vtu_string(&grid, VtuFormat::Binary).expect("xml"));
+        assert_eq!(ascii.len(), 6);
+        assert_eq!(binary.len(), ascii.len());
+        for ((name, ty, fa, text), (name_b, ty_b, fb, encoded)) in ascii.iter().zip(&binary) {
+            assert_eq!(
+                (name, ty, fa.as_str(), fb.as_str()),
+                (name_b, ty_b, "ascii", "binary")
+            );
+            let bytes = decode(encoded);
+            let words = text.split(' ');
+            match ty.as_str() {
+                "Float64" => {
+                    let expect: Vec<u64> =
+                        words.map(|w| w.parse::<f64>().unwrap().to_bits()).collect();
+                    let got: Vec<u64> = bytes
+                        .chunks_exact(8)
+                        .map(|b| f64::from_le_bytes(b.try_into().unwrap()).to_bits())
+                        .collect();
+                    assert_eq!(got, expect, "{name}");
+                }
+                "Int64" => {
+                    let expect: Vec<i64> = words.map(|w| w.parse().unwrap()).collect();
+                    let got: Vec<i64> = bytes
+                        .chunks_exact(8)
+                        .map(|b| i64::from_le_bytes(b.try_into().unwrap()))
+                        .collect();
+                    assert_eq!(got, expect, "{name}");
+                }
+                _ => {
+                    let expect: Vec<u8> = words.map(|w| w.parse().unwrap()).collect();
+                    assert_eq!(bytes, expect, "{name}");
+                }
+            }
+        }
+        // The point data hold exactly the field given.
+        let (_, _, _, text) = &binary[4];
+        let got: Vec<u64> = decode(text)
+            .chunks_exact(8)
+            .map(|b| u64::from_le_bytes(b.try_into().unwrap()))
+            .collect();
+        assert_eq!(got, s.iter().map(|v| v.to_bits()).collect::<Vec<_>>());
     }
 
     #[test]
