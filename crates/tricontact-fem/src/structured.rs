@@ -4,7 +4,8 @@
 //! to tet10 by inserting edge mid-nodes.
 //!
 //! Groups: `solid` (3D) and the six faces `xmin, xmax, ymin, ymax, zmin,
-//! zmax` (2D; quad4, tri3 or tri6 faces).
+//! zmax` (2D; quad4, tri3 or tri6 faces). [`stack`] puts two meshes in one
+//! (two bodies, e.g. for contact), their groups prefixed `lower_` and `upper_`.
 
 use std::collections::HashMap;
 
@@ -197,6 +198,37 @@ pub fn box_mesh(size: [f64; 3], n: [usize; 3], kind: ElementKind) -> Mesh {
     }
     mesh.groups = groups;
     mesh
+}
+
+/// Two meshes in one: node and element indices of `upper` shifted, its node coordinates moved
+/// by `offset`, groups renamed `lower_<name>` and `upper_<name>`.
+#[must_use]
+pub fn stack(lower: &Mesh, upper: &Mesh, offset: [f64; 3]) -> Mesh {
+    let mut m = lower.clone();
+    let (nn, ne) = (lower.nodes.len(), lower.elements.len());
+    for g in &mut m.groups {
+        g.name = format!("lower_{}", g.name);
+    }
+    for p in &upper.nodes {
+        m.nodes
+            .push([p[0] + offset[0], p[1] + offset[1], p[2] + offset[2]]);
+    }
+    m.node_tags = (1..=m.nodes.len() as u64).collect();
+    let tag0 = lower.elements.len() as u64;
+    for e in &upper.elements {
+        let mut e = e.clone();
+        e.nodes.iter_mut().for_each(|a| *a += nn);
+        e.tag += tag0;
+        m.elements.push(e);
+    }
+    for g in &upper.groups {
+        let mut g = g.clone();
+        g.name = format!("upper_{}", g.name);
+        g.elements.iter_mut().for_each(|e| *e += ne);
+        g.nodes.iter_mut().for_each(|a| *a += nn);
+        m.groups.push(g);
+    }
+    m
 }
 
 /// Moves every node not on the box boundary by a deterministic pseudo-random

@@ -28,7 +28,7 @@ material = "m"
 fn small_blocks(lower: ElementKind) -> tricontact_fem::mesh::Mesh {
     let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], lower);
     let u = box_mesh([0.5, 0.5, 0.25], [2, 2, 1], ElementKind::Hex8);
-    common::stack(&l, &u, [0.25, 0.25, 0.5])
+    tricontact_fem::structured::stack(&l, &u, [0.25, 0.25, 0.5])
 }
 
 fn contact(method: &str, extra: &str) -> String {
@@ -56,7 +56,7 @@ fn history(terms: &ContactTerms, key: &str) -> f64 {
 fn small_block(x0: f64, y0: f64) -> Mesh {
     let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Tet4);
     let u = box_mesh([0.25, 0.25, 0.25], [1, 1, 1], ElementKind::Hex8);
-    common::stack(&l, &u, [x0, y0, 0.5])
+    tricontact_fem::structured::stack(&l, &u, [x0, y0, 0.5])
 }
 
 #[test]
@@ -166,7 +166,7 @@ fn newton_converges_quadratically_once_the_active_set_is_fixed() {
     for method in ["penalty", "multiplier", "augmented"] {
         let l = box_mesh([1.0, 1.0, 0.5], [3, 3, 1], ElementKind::Hex8);
         let u = box_mesh([0.5, 0.5, 0.25], [2, 2, 1], ElementKind::Hex8);
-        let mesh = common::stack(&l, &u, [0.3, 0.3, 0.5]);
+        let mesh = tricontact_fem::structured::stack(&l, &u, [0.3, 0.3, 0.5]);
         let text = format!(
             "{MAT}[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n[[boundary]]\ngroup = \"upper_zmax\"\ndisplacement = {{ x = 0.02, y = 0.0, z = -0.01 }}\n{}[[step]]\nincrements = 2\nnlgeom = true\nresidual_tolerance = 1e-11\n",
             contact(method, "")
@@ -197,7 +197,7 @@ fn block_dragged_across_a_fine_master_keeps_its_normal_force() {
     for method in ["penalty", "multiplier", "augmented"] {
         let l = box_mesh([2.0, 1.0, 0.25], [16, 8, 1], ElementKind::Tet4);
         let u = box_mesh([0.5, 0.5, 0.25], [3, 3, 1], ElementKind::Hex8);
-        let mesh = common::stack(&l, &u, [0.2, 0.25, 0.25]);
+        let mesh = tricontact_fem::structured::stack(&l, &u, [0.2, 0.25, 0.25]);
         let text = format!(
             "{MAT}[[boundary]]\ngroup = \"lower_solid\"\nfix = [\"x\", \"y\", \"z\"]\n[[boundary]]\ngroup = \"upper_zmax\"\ndisplacement = {{ x = 0.9, y = 0.0 }}\n[[load]]\ngroup = \"upper_zmax\"\npressure = 4.0\nsteps = [\"drag\"]\n{}[[step]]\nname = \"drag\"\nincrements = 6\nresidual_tolerance = 1e-11\n",
             contact(method, "")
@@ -231,7 +231,7 @@ fn block_dragged_across_a_fine_master_keeps_its_normal_force() {
 fn block_pressed_on_a_convex_edge_stays_within_the_tolerance() {
     let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
     let u = box_mesh([0.6, 0.5, 0.25], [3, 2, 1], ElementKind::Hex8);
-    let mesh = common::stack(&l, &u, [0.7, 0.25, 0.5]);
+    let mesh = tricontact_fem::structured::stack(&l, &u, [0.7, 0.25, 0.5]);
     let text = format!(
         "{MAT}[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n[[boundary]]\ngroup = \"upper_zmax\"\ndisplacement = {{ x = 0.0, y = 0.0, z = -0.02 }}\n{}[[step]]\nincrements = 2\nnlgeom = true\n",
         contact("augmented", "tolerance = 1e-4\ntwo_pass = true")
@@ -248,7 +248,7 @@ fn block_pressed_on_a_convex_edge_stays_within_the_tolerance() {
 fn non_matching(method: &str, two_pass: bool) -> f64 {
     let l = box_mesh([1.0, 1.0, 0.5], [3, 3, 1], ElementKind::Tet4);
     let u = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
-    let mesh = common::stack(&l, &u, [0.0, 0.0, 0.5]);
+    let mesh = tricontact_fem::structured::stack(&l, &u, [0.0, 0.0, 0.5]);
     let mut text = format!("{MAT}[[load]]\ngroup = \"upper_zmax\"\npressure = 1.0\n");
     for side in ["lower", "upper"] {
         for (g, c) in [("xmin", "x"), ("xmax", "x"), ("ymin", "y"), ("ymax", "y")] {
@@ -305,7 +305,7 @@ fn non_matching_meshes_pressure_deviation_bounds() {
 fn small_sliding_passes_the_patch_test() {
     let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
     let u = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
-    let mesh = common::stack(&l, &u, [0.0, 0.0, 0.5]);
+    let mesh = tricontact_fem::structured::stack(&l, &u, [0.0, 0.0, 0.5]);
     let mut text = format!("{MAT}[[load]]\ngroup = \"upper_zmax\"\npressure = 1.0\n");
     for side in ["lower", "upper"] {
         for (g, c) in [("xmin", "x"), ("xmax", "x"), ("ymin", "y"), ("ymax", "y")] {
@@ -328,7 +328,7 @@ fn small_sliding_passes_the_patch_test() {
 fn adjust_removes_small_initial_penetrations_and_reports_deeper_ones() {
     let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
     let u = box_mesh([0.5, 0.5, 0.25], [1, 1, 1], ElementKind::Hex8);
-    let mesh = common::stack(&l, &u, [0.25, 0.25, 0.499]);
+    let mesh = tricontact_fem::structured::stack(&l, &u, [0.25, 0.25, 0.499]);
     let base = format!(
         "[mesh]\nfile = \"x.msh\"\n{MAT}[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n[[step]]\n"
     );
@@ -360,7 +360,7 @@ fn adjust_removes_small_initial_penetrations_and_reports_deeper_ones() {
 fn bad_contact_input_is_rejected_with_a_clear_message() {
     let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
     let u = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
-    let mesh = common::stack(&l, &u, [0.0, 0.0, 0.5]);
+    let mesh = tricontact_fem::structured::stack(&l, &u, [0.0, 0.0, 0.5]);
     let base = format!("[mesh]\nfile = \"x.msh\"\n{MAT}[[step]]\n");
     let err = |c: &str| {
         let text = format!("{base}{c}");
@@ -483,7 +483,7 @@ fn multiplier_status_cycling_is_frozen_and_reported() {
     use tricontact_fem::assembly::ExtraTerms;
     let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
     let u = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
-    let mesh = common::stack(&l, &u, [0.0, 0.0, 0.5]);
+    let mesh = tricontact_fem::structured::stack(&l, &u, [0.0, 0.0, 0.5]);
     let text = format!(
         "{MAT}[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n{}[[step]]\n",
         contact("multiplier", "")

@@ -70,7 +70,7 @@ displacement_tolerance = 1e-10
 fn blocks(lower: ([usize; 3], ElementKind), upper: ([usize; 3], ElementKind)) -> Mesh {
     let l = box_mesh([1.0, 1.0, 0.5], lower.0, lower.1);
     let u = box_mesh([1.0, 1.0, 0.5], upper.0, upper.1);
-    common::stack(&l, &u, [0.0, 0.0, 0.5])
+    tricontact_fem::structured::stack(&l, &u, [0.0, 0.0, 0.5])
 }
 
 /// Largest relative deviation of the slave pressures from `p`.

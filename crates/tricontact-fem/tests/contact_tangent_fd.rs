@@ -40,7 +40,7 @@ nlgeom = true
 fn check(method: &str) -> f64 {
     let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
     let u = box_mesh([0.6, 0.6, 0.5], [2, 2, 1], ElementKind::Hex8);
-    let mesh = common::stack(&l, &u, [0.13, 0.21, 0.5]);
+    let mesh = tricontact_fem::structured::stack(&l, &u, [0.13, 0.21, 0.5]);
     let an = common::analysis(mesh, &model(method));
     let mut terms = ContactTerms::new(&an);
     let n_extra = terms.num_extra();

@@ -81,36 +81,6 @@ pub fn box_boundary_nodes(mesh: &Mesh, size: [f64; 3]) -> Vec<usize> {
         .collect()
 }
 
-/// Two meshes in one: node and element indices of `upper` shifted, its node coordinates moved
-/// by `offset`, groups renamed `lower_<name>` and `upper_<name>`.
-pub fn stack(lower: &Mesh, upper: &Mesh, offset: [f64; 3]) -> Mesh {
-    let mut m = lower.clone();
-    let (nn, ne) = (lower.nodes.len(), lower.elements.len());
-    for g in &mut m.groups {
-        g.name = format!("lower_{}", g.name);
-    }
-    for p in &upper.nodes {
-        m.nodes
-            .push([p[0] + offset[0], p[1] + offset[1], p[2] + offset[2]]);
-    }
-    m.node_tags = (1..=m.nodes.len() as u64).collect();
-    let tag0 = lower.elements.len() as u64;
-    for e in &upper.elements {
-        let mut e = e.clone();
-        e.nodes.iter_mut().for_each(|a| *a += nn);
-        e.tag += tag0;
-        m.elements.push(e);
-    }
-    for g in &upper.groups {
-        let mut g = g.clone();
-        g.name = format!("upper_{}", g.name);
-        g.elements.iter_mut().for_each(|e| *e += ne);
-        g.nodes.iter_mut().for_each(|a| *a += nn);
-        m.groups.push(g);
-    }
-    m
-}
-
 /// Runs with the model's contact pairs; returns the contact terms at the end and the records.
 pub fn solve_contact(
     an: &Analysis,
