@@ -41,6 +41,12 @@ pub trait ExtraTerms: Send {
     fn num_extra(&self) -> usize {
         0
     }
+    /// The node each extra unknown belongs to (`None`: none), for the equation
+    /// ordering: an unknown follows its node's equations (see
+    /// [`crate::ordering::equation_order`]). By default none belongs to a node.
+    fn extra_nodes(&self) -> Vec<Option<usize>> {
+        Vec::new()
+    }
     /// Whether the added tangent is symmetric (keeps Cholesky or `LDLᵀ` usable).
     fn symmetric(&self) -> bool {
         true

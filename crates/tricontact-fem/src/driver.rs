@@ -248,7 +248,8 @@ pub fn run(
         let dm = DofMap::new(&an.active_nodes, &mask, extra.num_extra());
         let adj = node_adjacency(an);
         let pat = Pattern::from_adjacency(&adj, &dm);
-        let mut solver = LinearSolver::new().with_order(equation_order(&an.mesh.nodes, &adj, &dm));
+        let order = equation_order(&an.mesh.nodes, &adj, &dm, &extra.extra_nodes());
+        let mut solver = LinearSolver::new().with_order(order);
         drop(adj);
         let u_step = u.clone();
         // Reactions of DOFs released at this step are ramped down to zero.

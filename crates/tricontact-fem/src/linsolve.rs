@@ -9,9 +9,10 @@
 //! and for unsymmetric systems, a sparse LU with partial pivoting is used. A rejected `LDLᵀ` is not
 //! tried again by the same solver (one per step): a body held only by contact makes the
 //! displacement block singular, and without pivoting every factorization then loses accuracy
-//! (the contact patch test: backward error 3·10⁻⁶). Multipliers are ordered
-//! after the displacements they constrain, so their `LDLᵀ` pivots are the (negative) Schur
-//! complements `−bᵀK⁻¹b` and no pivoting is needed. The symbolic analysis (fill-reducing
+//! (the contact patch test: backward error 3·10⁻⁶). Each multiplier is ordered
+//! after the nested-dissection block of its slave node ([`crate::ordering`]), so the
+//! displacements it constrains there come first, its `LDLᵀ` pivot is a (negative) Schur
+//! complement `−bᵀK̃⁻¹b` and no pivoting is needed. The symbolic analysis (fill-reducing
 //! ordering, elimination tree) is kept and reused while the pattern is
 //! unchanged. A failed LU, or a non-finite solution, is reported as a
 //! singular system.

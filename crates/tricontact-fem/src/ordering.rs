@@ -5,8 +5,20 @@
 //! a neighbour in `R` form the separator `S`. The order is
 //! `ND(L \ S), ND(R), S` — separators last — down to blocks of at most
 //! 64 nodes, which keep their input order. Equations follow their nodes
-//! (free components in order), extra unknowns come last. For 3D meshes this
-//! gives far less Cholesky fill than minimum degree.
+//! (free components in order); an extra unknown that belongs to a node (a
+//! contact multiplier, to its slave node) follows the block (leaf or
+//! separator) of that node, the others come last. For 3D meshes this gives
+//! far less Cholesky fill than minimum degree.
+//!
+//! A multiplier after its slave node keeps the saddle-point system
+//! factorable by `LDLᵀ` without pivoting: when it is eliminated, the
+//! displacements it constrains at that node already are, so its pivot is
+//! `−bᵀK̃⁻¹b < 0` with `K̃` their (positive definite) Schur complement; and it
+//! keeps the fill local. With all multipliers last, their Schur complement
+//! `−B K⁻¹ Bᵀ` is a dense block of the size of the slave surface. Each
+//! multiplier right after its own node instead splits the factor's
+//! supernodes: measured 2.3× slower than multipliers last on the fine Hertz
+//! mesh (1 089 multipliers); after their node's block, see the README.
 
 use crate::assembly::{DofMap, NO_EQ};
 
@@ -16,10 +28,29 @@ const LEAF: usize = 64;
 /// and node adjacency.
 #[must_use]
 pub fn nested_dissection(coords: &[[f64; 3]], adj: &[Vec<usize>], nodes: Vec<usize>) -> Vec<usize> {
+    dissection_blocks(coords, adj, nodes).0
+}
+
+/// [`nested_dissection`] with the end of each block in the order (a leaf or a
+/// separator), increasing, the last one the order's length.
+fn dissection_blocks(
+    coords: &[[f64; 3]],
+    adj: &[Vec<usize>],
+    nodes: Vec<usize>,
+) -> (Vec<usize>, Vec<usize>) {
     let mut side = vec![0u8; coords.len()];
     let mut out = Vec::with_capacity(nodes.len());
-    dissect(coords, adj, nodes, &mut side, &mut out);
-    out
+    let mut ends = Vec::new();
+    dissect(coords, adj, nodes, &mut side, (&mut out, &mut ends));
+    (out, ends)
+}
+
+/// Appends a block of nodes to the order and records its end.
+fn block(out: &mut Vec<usize>, ends: &mut Vec<usize>, nodes: &[usize]) {
+    if !nodes.is_empty() {
+        out.extend_from_slice(nodes);
+        ends.push(out.len());
+    }
 }
 
 fn dissect(
@@ -27,10 +58,10 @@ fn dissect(
     adj: &[Vec<usize>],
     mut nodes: Vec<usize>,
     side: &mut [u8],
-    out: &mut Vec<usize>,
+    (out, ends): (&mut Vec<usize>, &mut Vec<usize>),
 ) {
     if nodes.len() <= LEAF {
-        out.extend_from_slice(&nodes);
+        block(out, ends, &nodes);
         return;
     }
     let mut lo = [f64::INFINITY; 3];
@@ -58,43 +89,102 @@ fn dissect(
     }
     if left.is_empty() {
         // Degenerate split (e.g. all nodes coincide on the axis): stop here.
-        out.extend_from_slice(&right);
-        out.extend_from_slice(&sep);
+        block(out, ends, &right);
+        block(out, ends, &sep);
         return;
     }
-    dissect(coords, adj, left, side, out);
-    dissect(coords, adj, right, side, out);
-    out.extend_from_slice(&sep);
+    dissect(coords, adj, left, side, (&mut *out, &mut *ends));
+    dissect(coords, adj, right, side, (&mut *out, &mut *ends));
+    block(out, ends, &sep);
 }
 
 /// Equation permutation `new → old` from a nested dissection of the nodes
 /// that carry equations (`adj` is the node adjacency of the body elements).
+/// `owners[k]` is the node extra unknown `k` belongs to: its equation follows
+/// the block (leaf or separator) of that node, or comes last when it has none
+/// (`None`, a node without equations, or `owners` shorter than the extra
+/// unknowns).
 #[must_use]
-pub fn equation_order(coords: &[[f64; 3]], adj: &[Vec<usize>], dm: &DofMap) -> Vec<usize> {
-    let nodes: Vec<usize> = (0..coords.len())
-        .filter(|&a| (0..3).any(|i| dm.eq[3 * a + i] != NO_EQ))
-        .collect();
-    let order = nested_dissection(coords, adj, nodes);
-    let mut perm = Vec::with_capacity(dm.n_eq);
-    for a in order {
-        for i in 0..3 {
-            let e = dm.eq[3 * a + i];
-            if e != NO_EQ {
-                perm.push(e);
-            }
-        }
-    }
+pub fn equation_order(
+    coords: &[[f64; 3]],
+    adj: &[Vec<usize>],
+    dm: &DofMap,
+    owners: &[Option<usize>],
+) -> Vec<usize> {
+    let has_eq = |a: usize| (0..3).any(|i| dm.eq[3 * a + i] != NO_EQ);
+    let nodes: Vec<usize> = (0..coords.len()).filter(|&a| has_eq(a)).collect();
+    let mut owned: Vec<Vec<usize>> = vec![Vec::new(); coords.len()];
+    let mut last = Vec::new();
     for d in dm.n_nodal..dm.eq.len() {
-        if dm.eq[d] != NO_EQ {
-            perm.push(dm.eq[d]);
+        let e = dm.eq[d];
+        if e == NO_EQ {
+            continue;
+        }
+        match owners.get(d - dm.n_nodal).copied().flatten() {
+            Some(a) if a < coords.len() && has_eq(a) => owned[a].push(e),
+            _ => last.push(e),
         }
     }
+    let (order, ends) = dissection_blocks(coords, adj, nodes);
+    let mut perm = Vec::with_capacity(dm.n_eq);
+    let mut start = 0;
+    for end in ends {
+        let nodes = &order[start..end];
+        for &a in nodes {
+            perm.extend((0..3).map(|i| dm.eq[3 * a + i]).filter(|&e| e != NO_EQ));
+        }
+        for &a in nodes {
+            perm.extend_from_slice(&owned[a]);
+        }
+        start = end;
+    }
+    perm.extend(last);
     perm
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn extra_unknowns_follow_their_nodes_block_or_come_last() {
+        // 300 nodes on a line; node 150 fully prescribed, node 3's z prescribed.
+        let n = 300;
+        let coords: Vec<[f64; 3]> = (0..n).map(|k| [k as f64, 0.0, 0.0]).collect();
+        let adj: Vec<Vec<usize>> = (0..n)
+            .map(|k: usize| (k.saturating_sub(1)..(k + 2).min(n)).collect())
+            .collect();
+        let mut prescribed = vec![false; 3 * n];
+        prescribed[450..453].fill(true);
+        prescribed[11] = true;
+        // Extras: one per tenth node (0, 10, …, 290, 150 among them), one of none, one more
+        // that `owners` does not list.
+        let owners: Vec<Option<usize>> = (0..n / 10).map(|k| Some(10 * k)).chain([None]).collect();
+        let dm = DofMap::new(&vec![true; n], &prescribed, owners.len() + 1);
+        let perm = equation_order(&coords, &adj, &dm, &owners);
+        let mut sorted = perm.clone();
+        sorted.sort_unstable();
+        assert_eq!(sorted, (0..dm.n_eq).collect::<Vec<_>>());
+        let at = |e: usize| perm.iter().position(|&p| p == e).expect("ordered");
+        let extra = |k: usize| dm.eq[3 * n + k];
+        for (k, owner) in owners.iter().enumerate() {
+            let Some(a) = *owner else { continue };
+            if a == 150 {
+                continue;
+            }
+            // After its node, within a block of at most `LEAF` nodes and their extras.
+            let node = at(dm.eq[3 * a + 1]);
+            assert!(at(extra(k)) > node, "extra {k}");
+            assert!(at(extra(k)) - node <= 3 * LEAF + LEAF / 10 + 1, "extra {k}");
+        }
+        // Extras of a node without equations, of none, or unlisted: last, in their order.
+        let last: Vec<usize> = [15, 30, 31].iter().map(|&k| extra(k)).collect();
+        assert_eq!(&perm[perm.len() - 3..], &last[..]);
+        // Nothing owned: all extras last.
+        let plain = equation_order(&coords, &adj, &dm, &[]);
+        let all: Vec<usize> = (0..=31).map(extra).collect();
+        assert_eq!(&plain[plain.len() - 32..], &all[..]);
+    }
 
     #[test]
     fn is_a_permutation_with_separators_last() {

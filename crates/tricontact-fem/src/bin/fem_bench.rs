@@ -8,18 +8,24 @@
 //! `--amd` replaces the nested-dissection ordering by faer's AMD;
 //! `--dense M` only times a dense `M × M` Cholesky (machine reference);
 //! `--vtu` only times encoding a `.vtu` of the cube (the fields a run writes, synthetic values)
-//! as ASCII and as binary, and prints the sizes.
+//! as ASCII and as binary, and prints the sizes;
+//! `--contact N [M]` only times a contact run: an `M × M × 2` hex8 block (default `M = N − 1`)
+//! pressed onto an `N × N × 2` one, `(M + 1)²` slave nodes, with Lagrange multipliers and with
+//! a penalty (one increment each); with `--multipliers-last` the multipliers are ordered after
+//! all displacements, as before they followed their slave nodes.
 
 use std::time::Instant;
 
 use tricontact_fem::analysis::Analysis;
-use tricontact_fem::assembly::{DofMap, NoExtra, Pattern, assemble, node_adjacency};
+use tricontact_fem::assembly::{DofMap, ExtraTerms, NoExtra, Pattern, assemble, node_adjacency};
+use tricontact_fem::contact::ContactTerms;
+use tricontact_fem::driver::run;
 use tricontact_fem::driver::{external_forces, step_constraints};
 use tricontact_fem::linsolve::{LinearSolver, Structure};
 use tricontact_fem::mesh::ElementKind;
 use tricontact_fem::model::Model;
 use tricontact_fem::ordering::equation_order;
-use tricontact_fem::structured::box_mesh;
+use tricontact_fem::structured::{box_mesh, stack};
 use tricontact_fem::vtu::{Field, Grid, VtuFormat, vtk_cell, vtu_string};
 
 /// Dense Cholesky of an `m × m` SPD matrix: the machine's dense GFlop/s,
@@ -115,7 +121,124 @@ fn vtu_encoding(n: usize) {
     );
 }
 
+/// The model of [`contact_run`] for `method`.
+fn contact_model(method: &str) -> String {
+    format!(
+        "[mesh]\nfile = \"none\"\n\
+         [[material]]\nname = \"m\"\ntype = \"linear_elastic\"\nE = 1000.0\nnu = 0.3\n\
+         [[body]]\ngroup = \"lower_solid\"\nmaterial = \"m\"\n\
+         [[body]]\ngroup = \"upper_solid\"\nmaterial = \"m\"\n\
+         [[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n\
+         [[boundary]]\ngroup = \"upper_zmax\"\ndisplacement = {{ x = 0.0, y = 0.0, z = -0.002 }}\n\
+         [[contact]]\nslave = \"upper_zmin\"\nmaster = \"lower_zmax\"\nmethod = \"{method}\"\n\
+         [[step]]\n"
+    )
+}
+
+/// Contact terms whose multipliers are ordered after all displacements (the ordering before
+/// multipliers followed their slave nodes' blocks), for comparison: everything else delegates.
+struct MultipliersLast(ContactTerms);
+
+impl ExtraTerms for MultipliersLast {
+    fn num_extra(&self) -> usize {
+        self.0.num_extra()
+    }
+    fn symmetric(&self) -> bool {
+        self.0.symmetric()
+    }
+    fn definite(&self) -> bool {
+        self.0.definite()
+    }
+    fn nonlinear(&self) -> bool {
+        self.0.nonlinear()
+    }
+    fn supports_bodies(&self) -> bool {
+        self.0.supports_bodies()
+    }
+    fn begin_increment(&mut self, u: &[f64]) -> Result<(), String> {
+        self.0.begin_increment(u)
+    }
+    fn add_terms(
+        &mut self,
+        u: &[f64],
+        residual: &mut [f64],
+        triplets: &mut Vec<(usize, usize, f64)>,
+    ) -> Result<(), String> {
+        self.0.add_terms(u, residual, triplets)
+    }
+    fn iteration_note(&self) -> Option<String> {
+        self.0.iteration_note()
+    }
+    fn after_converged(&mut self, u: &[f64]) -> Result<bool, String> {
+        self.0.after_converged(u)
+    }
+    fn commit(&mut self) {
+        self.0.commit();
+    }
+    fn restore(&mut self) {
+        self.0.restore();
+    }
+}
+
+/// Times a contact run with multipliers and with a penalty on two stacked hex8 blocks.
+fn contact_run(n: usize, m: usize) {
+    let lower = box_mesh([1.0, 1.0, 0.2], [n, n, 2], ElementKind::Hex8);
+    let upper = box_mesh([0.9, 0.9, 0.2], [m, m, 2], ElementKind::Hex8);
+    let mesh = stack(&lower, &upper, [0.05, 0.05, 0.2]);
+    println!(
+        "contact: hex8 {m}x{m}x2 block on {n}x{n}x2, {} nodes, {} slave nodes, {} threads",
+        mesh.nodes.len(),
+        (m + 1) * (m + 1),
+        rayon::current_num_threads()
+    );
+    let last = std::env::args().any(|a| a == "--multipliers-last");
+    for method in ["multiplier", "penalty"] {
+        let model = Model::parse(&contact_model(method), std::path::Path::new("bench.toml"))
+            .expect("valid model");
+        let an = Analysis::new(&model, mesh.clone()).expect("valid analysis");
+        let mut terms: Box<dyn ExtraTerms> = if last && method == "multiplier" {
+            Box::new(MultipliersLast(ContactTerms::new(&an)))
+        } else {
+            Box::new(ContactTerms::new(&an))
+        };
+        let t = Instant::now();
+        let mut factor = String::new();
+        let summary = run(&an, terms.as_mut(), &mut |info| {
+            factor = info.method.to_string();
+            Ok(())
+        });
+        let secs = t.elapsed().as_secs_f64();
+        match summary {
+            Ok(s) => println!(
+                "{method:>10}{}: {secs:>8.2} s, {} Newton iterations ({:.2} s each), {} cutbacks, {factor}",
+                if last && method == "multiplier" {
+                    " (last)"
+                } else {
+                    ""
+                },
+                s.iterations,
+                secs / s.iterations.max(1) as f64,
+                s.cutbacks
+            ),
+            Err(e) => println!("{method:>10}: failed after {secs:.2} s: {e}"),
+        }
+    }
+}
+
 fn main() {
+    if let Some(n) = std::env::args()
+        .skip_while(|a| a != "--contact")
+        .nth(1)
+        .and_then(|s| s.parse::<usize>().ok())
+    {
+        let m = std::env::args()
+            .skip_while(|a| a != "--contact")
+            .nth(2)
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(n.saturating_sub(1).max(1));
+        contact_run(n, m);
+        return;
+    }
     if std::env::args().any(|a| a == "--vtu") {
         let n = std::env::args()
             .filter_map(|s| s.parse().ok())
@@ -163,7 +286,7 @@ fn main() {
     let order = if amd {
         None
     } else {
-        Some(equation_order(&an.mesh.nodes, &adj, &dm))
+        Some(equation_order(&an.mesh.nodes, &adj, &dm, &[]))
     };
     drop(adj);
     let t_pattern = t.elapsed();

@@ -237,6 +237,18 @@ impl ExtraTerms for ContactTerms {
         self.n_extra
     }
 
+    fn extra_nodes(&self) -> Vec<Option<usize>> {
+        let mut owners = vec![None; self.n_extra];
+        for (p, &offset) in self.pairs.iter().zip(&self.offsets) {
+            if p.method == ContactMethod::Multiplier {
+                for (j, &s) in p.passes[0].slaves.iter().enumerate() {
+                    owners[offset + j] = Some(s);
+                }
+            }
+        }
+        owners
+    }
+
     fn symmetric(&self) -> bool {
         true
     }
