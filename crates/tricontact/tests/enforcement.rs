@@ -152,7 +152,7 @@ fn slave_node_is_pushed_out_along_the_normal() {
 
 mod contact_enforcement {
     use super::*;
-    use tricontact::contact::{augmented, multiplier_block};
+    use tricontact::contact::{augmented, augmented_closed, multiplier_block};
 
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(CASES))]
@@ -179,6 +179,29 @@ mod contact_enforcement {
             prop_assert_eq!(exact.updated_multiplier(), exact.lambda_hat.min(0.0));
             if exact.lambda_hat >= 0.0 {
                 prop_assert_eq!(exact.force, Vec12::zeros());
+            }
+        }
+
+        /// A node held closed: the force is the gradient of `λ̂²/(2α)` for either sign of `λ̂`
+        /// and the tangent its derivative; where `λ̂ < 0` the terms are [`augmented`]'s.
+        #[test]
+        fn augmented_closed_terms_are_consistent(x in pair(), lk in -5.0..5.0f64) {
+            let a = alpha(&x);
+            let lambda_k = lk * a * facet_size(&x);
+            let h = REL_STEP * facet_size(&x);
+            let energy = |y: &Vec12| {
+                let m = lambda_k + a * pair_at(y).gap();
+                0.5 * m * m / a
+            };
+            let exact = augmented_closed(&pair_at(&x), lambda_k, a).unwrap();
+            let scale = a * facet_size(&x);
+            let fd = fd_gradient(energy, &x, h);
+            prop_assert!(rel_err_floor(&fd, &exact.force, scale) <= TOL);
+            let fd =
+                fd_jacobian(|y| augmented_closed(&pair_at(y), lambda_k, a).unwrap().force, &x, h);
+            prop_assert!(rel_err_floor(&fd, &exact.stiffness, a) <= TOL);
+            if exact.lambda_hat < 0.0 {
+                prop_assert_eq!(exact, augmented(&pair_at(&x), lambda_k, a).unwrap());
             }
         }
 

@@ -155,6 +155,24 @@ pub fn augmented(
             stiffness: Mat12::zeros(),
         });
     }
+    augmented_closed(pair, lambda_k, alpha)
+}
+
+/// The augmented-Lagrangian terms of a node held closed whatever the sign of `λ̂`: `f = λ̂∇P`,
+/// `K = α∇P⊗∇P + λ̂∇²P`, the gradient and Hessian of `λ̂²/(2α)` (for `λ̂ > 0` a pull; the host
+/// holds a node closed when its status cycles). Equal to [`augmented`] where `λ̂ < 0`.
+///
+/// # Errors
+/// [`GeometryError::Overflow`] for a non-finite result.
+pub fn augmented_closed(
+    pair: &NodeFacet,
+    lambda_k: f64,
+    alpha: f64,
+) -> Result<AugmentedTerms, GeometryError> {
+    let lambda_hat = lambda_k + alpha * pair.gap();
+    if !lambda_hat.is_finite() {
+        return Err(GeometryError::Overflow);
+    }
     // α∇P⊗∇P + λ̂∇²P is the penalty builder with (α, β) = (α, λ̂).
     let terms = crate::penalty::penalty_with(pair, alpha, lambda_hat)?;
     Ok(AugmentedTerms {

@@ -13,4 +13,6 @@ pub mod enforcement;
 
 pub use assembly::{Constraint, PenaltyAssembly, assemble_penalty};
 pub use choice::{PROJECTION_TOLERANCE, choose_facet};
-pub use enforcement::{AugmentedTerms, MultiplierBlock, augmented, multiplier_block, wants_active};
+pub use enforcement::{
+    AugmentedTerms, MultiplierBlock, augmented, augmented_closed, multiplier_block, wants_active,
+};
