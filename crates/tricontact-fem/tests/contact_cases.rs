@@ -479,6 +479,67 @@ fn contact_fields_and_history_columns_are_written() {
 }
 
 #[test]
+fn penalty_and_augmented_cycling_nodes_are_held_closed() {
+    use tricontact_fem::assembly::ExtraTerms;
+    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
+    let u = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
+    let mesh = tricontact_fem::structured::stack(&l, &u, [0.0, 0.0, 0.5]);
+    for method in ["penalty", "augmented"] {
+        let text = format!(
+            "{MAT}[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n{}[[step]]\n",
+            contact(method, "")
+        );
+        let an = common::analysis(mesh.clone(), &text);
+        let upper: Vec<usize> = an.mesh.group("upper_solid").expect("group").nodes.clone();
+        let mut terms = ContactTerms::new(&an);
+        let mut u = vec![0.0; an.num_nodal_dofs()];
+        terms.begin_increment(&u).expect("begin");
+        // The upper block alternately penetrates (closed) and lifts off by 10⁻³ (open).
+        let mut notes = Vec::new();
+        let mut fz = Vec::new();
+        for k in 0..8 {
+            let dz = if k % 2 == 0 { -1e-3 } else { 1e-3 };
+            for &a in &upper {
+                u[3 * a + 2] = dz;
+            }
+            let mut r = vec![0.0; u.len()];
+            terms.add_terms(&u, &mut r, &mut Vec::new()).expect("terms");
+            notes.push(terms.iteration_note().unwrap_or_default());
+            // The contact's internal force `αP∇P` on the slave nodes, along z: negative in
+            // compression (`P < 0`), positive when it pulls (`P > 0`).
+            let bottom = &an.mesh.group("upper_zmin").expect("group").nodes;
+            fz.push(bottom.iter().map(|&a| r[3 * a + 2]).sum::<f64>());
+        }
+        // Changes 1..=4 follow the geometry; the 5th (closing) holds all 9 nodes closed.
+        assert!(
+            notes[3].contains(" 0 closed") && !notes[3].contains("frozen"),
+            "{method} {notes:?}"
+        );
+        assert!(
+            notes[4].contains("9 closed") && notes[4].contains("9 frozen"),
+            "{method} {notes:?}"
+        );
+        // Lifted off but held: still closed, the contact now pulls the slave nodes down.
+        assert!(
+            notes[5].contains("9 closed, 0 changed"),
+            "{method} {notes:?}"
+        );
+        assert!(fz[4] < 0.0 && fz[5] > 0.0, "{method} {fz:?}");
+        // A new increment starts unfrozen: lifted off, the nodes open.
+        terms.restore();
+        terms.begin_increment(&vec![0.0; u.len()]).expect("begin");
+        terms
+            .add_terms(&u, &mut vec![0.0; u.len()], &mut Vec::new())
+            .expect("terms");
+        let note = terms.iteration_note().unwrap_or_default();
+        assert!(
+            note.contains(" 0 closed") && !note.contains("frozen"),
+            "{method} {note}"
+        );
+    }
+}
+
+#[test]
 fn multiplier_status_cycling_is_frozen_and_reported() {
     use tricontact_fem::assembly::ExtraTerms;
     let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);

@@ -2,11 +2,12 @@
 //! during a Newton solve:
 //!
 //! ```text
-//! λ̂ = λ_k + α P;   λ̂ < 0:  f = λ̂ ∇P,   K = α ∇P⊗∇P + λ̂ ∇²P;   else nothing
+//! λ̂ = λ_k + α P;   closed (λ̂ < 0, or λ̂ = 0 ≥ P):  f = λ̂ ∇P,   K = α ∇P⊗∇P + λ̂ ∇²P;   else nothing
 //! ```
 //!
 //! (`λ̂ = 0` with `P = 0` keeps the stiffness `α∇P⊗∇P`, so touching bodies are supported from the
-//! first iteration.) After Newton converged, the Uzawa update `λ_{k+1} = min(0, λ̂)` is applied to
+//! first iteration; a node whose status cycles is held closed for the rest of the increment, see
+//! [`super::ContactTerms`].) After Newton converged, the Uzawa update `λ_{k+1} = min(0, λ̂)` is applied to
 //! every node until the largest penetration is below the pair's tolerance (see
 //! [`super::ContactTerms`]). Finite sliding uses the kernel's [`tricontact::contact::augmented`].
 
@@ -14,7 +15,27 @@ use tricontact::{GeometryError, Mat12, Vec12};
 
 use super::gap::Gap;
 
-/// `(λ̂, force and tangent when active)`.
+/// `λ̂ = λ_k + αP`.
+///
+/// # Errors
+/// [`GeometryError::Overflow`] when it is not finite.
+pub fn lambda_hat(gap: &Gap, lambda_k: f64, alpha: f64) -> Result<f64, GeometryError> {
+    let lambda_hat = lambda_k + alpha * gap.gap();
+    if lambda_hat.is_finite() {
+        Ok(lambda_hat)
+    } else {
+        Err(GeometryError::Overflow)
+    }
+}
+
+/// Whether the node closes at `λ̂`: compression, or `λ̂ = 0` while touching or penetrating.
+#[must_use]
+pub fn wants_closed(gap: &Gap, lambda_hat: f64) -> bool {
+    lambda_hat < 0.0 || (lambda_hat == 0.0 && gap.gap() <= 0.0)
+}
+
+/// Force `λ̂∇P` and tangent `α∇P⊗∇P + λ̂∇²P` of a closed node (a node held closed may have
+/// `λ̂ > 0`: a pull; at `λ̂ = 0 = P` the stiffness `α∇P⊗∇P` alone).
 ///
 /// # Errors
 /// A [`GeometryError`] of the kernel (overflow).
@@ -22,26 +43,15 @@ pub fn augmented_terms(
     gap: &Gap,
     lambda_k: f64,
     alpha: f64,
-) -> Result<(f64, Option<(Vec12, Mat12)>), GeometryError> {
-    let p = gap.gap();
-    let lambda_hat = lambda_k + alpha * p;
-    if !lambda_hat.is_finite() {
-        return Err(GeometryError::Overflow);
-    }
-    if lambda_hat > 0.0 || (lambda_hat == 0.0 && p > 0.0) {
-        return Ok((lambda_hat, None));
-    }
-    let terms = match gap {
-        Gap::Finite(pair) if lambda_hat < 0.0 => {
-            let t = tricontact::contact::augmented(pair, lambda_k, alpha)?;
-            (t.force, t.stiffness)
-        }
-        // λ̂ = 0 = P: the penalty tangent α(∇P⊗∇P + 0·∇²P).
+) -> Result<(Vec12, Mat12), GeometryError> {
+    Ok(match gap {
         Gap::Finite(pair) => {
-            let t = tricontact::penalty(pair, alpha)?;
+            let t = tricontact::contact::augmented_closed(pair, lambda_k, alpha)?;
             (t.force, t.stiffness)
         }
-        Gap::Linear { .. } => (gap.gradient() * lambda_hat, gap.outer(alpha)),
-    };
-    Ok((lambda_hat, Some(terms)))
+        Gap::Linear { .. } => (
+            gap.gradient() * (lambda_k + alpha * gap.gap()),
+            gap.outer(alpha),
+        ),
+    })
 }

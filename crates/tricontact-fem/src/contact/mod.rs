@@ -232,6 +232,23 @@ fn scatter(
     }
 }
 
+/// The status of a node this iteration: the status it `want`s, counting a change from
+/// `was_active`; on the change after [`MAX_SWITCHES`] the status is frozen at `hold` for the rest
+/// of the increment, and a frozen node keeps it.
+fn settle(st: &mut NodeState, was_active: bool, want: bool, hold: bool) -> bool {
+    if let Some(f) = st.frozen {
+        return f;
+    }
+    if want != was_active {
+        st.switches += 1;
+        if st.switches > MAX_SWITCHES {
+            st.frozen = Some(hold);
+            return hold;
+        }
+    }
+    want
+}
+
 impl ExtraTerms for ContactTerms {
     fn num_extra(&self) -> usize {
         self.n_extra
@@ -345,12 +362,19 @@ impl ExtraTerms for ContactTerms {
                     let geometry = |e: tricontact::GeometryError| format!("contact: {e}");
                     match method {
                         ContactMethod::Penalty => {
+                            let want = eval
+                                .as_ref()
+                                .is_some_and(|(_, _, g)| penalty::wants_closed(g));
+                            let act = settle(st, was_active, want, true) && eval.is_some();
+                            if st.frozen.is_some() {
+                                frozen += 1;
+                            }
                             st.active = false;
                             st.lambda = 0.0;
                             if let Some((_, fnodes, g)) = &eval
-                                && let Some((r, k)) =
-                                    penalty::penalty_terms(g, alpha).map_err(geometry)?
+                                && act
                             {
+                                let (r, k) = penalty::penalty_terms(g, alpha).map_err(geometry)?;
                                 st.active = true;
                                 st.lambda = alpha * g.gap();
                                 let nodes = [fnodes[0], fnodes[1], fnodes[2], s];
@@ -358,17 +382,32 @@ impl ExtraTerms for ContactTerms {
                             }
                         }
                         ContactMethod::Augmented => {
+                            let lambda_hat = match &eval {
+                                Some((_, _, g)) => Some(
+                                    augmented::lambda_hat(g, st.lambda_k, alpha)
+                                        .map_err(geometry)?,
+                                ),
+                                None => None,
+                            };
+                            let want = eval
+                                .as_ref()
+                                .zip(lambda_hat)
+                                .is_some_and(|((_, _, g), lh)| augmented::wants_closed(g, lh));
+                            let act = settle(st, was_active, want, true) && eval.is_some();
+                            if st.frozen.is_some() {
+                                frozen += 1;
+                            }
                             st.active = false;
                             st.lambda = 0.0;
-                            if let Some((_, fnodes, g)) = &eval {
-                                let (lh, terms) = augmented::augmented_terms(g, st.lambda_k, alpha)
+                            if let (Some((_, fnodes, g)), Some(lh)) = (&eval, lambda_hat)
+                                && act
+                            {
+                                let (r, k) = augmented::augmented_terms(g, st.lambda_k, alpha)
                                     .map_err(geometry)?;
-                                if let Some((r, k)) = terms {
-                                    st.active = true;
-                                    st.lambda = lh;
-                                    let nodes = [fnodes[0], fnodes[1], fnodes[2], s];
-                                    scatter(nodes, &r, &k, residual, &mut force, triplets);
-                                }
+                                st.active = true;
+                                st.lambda = lh;
+                                let nodes = [fnodes[0], fnodes[1], fnodes[2], s];
+                                scatter(nodes, &r, &k, residual, &mut force, triplets);
                             }
                         }
                         ContactMethod::Multiplier => {
@@ -377,18 +416,7 @@ impl ExtraTerms for ContactTerms {
                             let want = eval.as_ref().is_some_and(|(_, _, g)| {
                                 multiplier::wants_active(g.gap(), lambda, alpha)
                             });
-                            let act = match st.frozen {
-                                Some(f) => f && eval.is_some(),
-                                None => {
-                                    if want != was_active {
-                                        st.switches += 1;
-                                        if st.switches > MAX_SWITCHES {
-                                            st.frozen = Some(want);
-                                        }
-                                    }
-                                    want
-                                }
-                            };
+                            let act = settle(st, was_active, want, want) && eval.is_some();
                             if st.frozen.is_some() {
                                 frozen += 1;
                             }

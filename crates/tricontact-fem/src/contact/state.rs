@@ -20,9 +20,9 @@ pub struct NodeState {
     pub lambda_k: f64,
     /// Closed (carrying force) at the last evaluation.
     pub active: bool,
-    /// Status changes in this increment (multiplier method: cycle detection).
+    /// Status changes in this increment (cycle detection).
     pub switches: u32,
-    /// Status frozen for the rest of the increment after cycling.
+    /// Status frozen for the rest of the increment after cycling (penalty and augmented: closed).
     pub frozen: Option<bool>,
     /// Facet changes in this increment (cycle detection).
     pub facet_switches: u32,
