@@ -15,17 +15,12 @@ use tricontact::{GeometryError, Mat12, Vec12};
 
 use super::gap::Gap;
 
-/// `λ̂ = λ_k + αP`.
+/// `λ̂ = λ_k + αP` ([`tricontact::contact::lambda_hat`]).
 ///
 /// # Errors
 /// [`GeometryError::Overflow`] when it is not finite.
 pub fn lambda_hat(gap: &Gap, lambda_k: f64, alpha: f64) -> Result<f64, GeometryError> {
-    let lambda_hat = lambda_k + alpha * gap.gap();
-    if lambda_hat.is_finite() {
-        Ok(lambda_hat)
-    } else {
-        Err(GeometryError::Overflow)
-    }
+    tricontact::contact::lambda_hat(gap.gap(), lambda_k, alpha)
 }
 
 /// Whether the node closes at `λ̂`: compression, or `λ̂ = 0` while touching or penetrating.
@@ -50,7 +45,7 @@ pub fn augmented_terms(
             (t.force, t.stiffness)
         }
         Gap::Linear { .. } => (
-            gap.gradient() * (lambda_k + alpha * gap.gap()),
+            gap.gradient() * lambda_hat(gap, lambda_k, alpha)?,
             gap.outer(alpha),
         ),
     })

@@ -135,6 +135,20 @@ impl AugmentedTerms {
     }
 }
 
+/// The augmented Lagrangian's force measure `λ̂ = λ_k + αP` at gap `P`.
+///
+/// # Errors
+/// [`GeometryError::Overflow`] when it is not finite.
+#[inline]
+pub fn lambda_hat(gap: f64, lambda_k: f64, alpha: f64) -> Result<f64, GeometryError> {
+    let lambda_hat = lambda_k + alpha * gap;
+    if lambda_hat.is_finite() {
+        Ok(lambda_hat)
+    } else {
+        Err(GeometryError::Overflow)
+    }
+}
+
 /// Augmented-Lagrangian force and tangent of `pair` for estimate `lambda_k` and penalty `alpha`.
 ///
 /// # Errors
@@ -144,10 +158,7 @@ pub fn augmented(
     lambda_k: f64,
     alpha: f64,
 ) -> Result<AugmentedTerms, GeometryError> {
-    let lambda_hat = lambda_k + alpha * pair.gap();
-    if !lambda_hat.is_finite() {
-        return Err(GeometryError::Overflow);
-    }
+    let lambda_hat = lambda_hat(pair.gap(), lambda_k, alpha)?;
     if lambda_hat >= 0.0 {
         return Ok(AugmentedTerms {
             lambda_hat,
@@ -169,10 +180,7 @@ pub fn augmented_closed(
     lambda_k: f64,
     alpha: f64,
 ) -> Result<AugmentedTerms, GeometryError> {
-    let lambda_hat = lambda_k + alpha * pair.gap();
-    if !lambda_hat.is_finite() {
-        return Err(GeometryError::Overflow);
-    }
+    let lambda_hat = lambda_hat(pair.gap(), lambda_k, alpha)?;
     // α∇P⊗∇P + λ̂∇²P is the penalty builder with (α, β) = (α, λ̂).
     let terms = crate::penalty::penalty_with(pair, alpha, lambda_hat)?;
     Ok(AugmentedTerms {

@@ -14,5 +14,6 @@ pub mod enforcement;
 pub use assembly::{Constraint, PenaltyAssembly, assemble_penalty};
 pub use choice::{PROJECTION_TOLERANCE, choose_facet};
 pub use enforcement::{
-    AugmentedTerms, MultiplierBlock, augmented, augmented_closed, multiplier_block, wants_active,
+    AugmentedTerms, MultiplierBlock, augmented, augmented_closed, lambda_hat, multiplier_block,
+    wants_active,
 };
