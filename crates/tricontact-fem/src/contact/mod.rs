@@ -17,8 +17,12 @@
 //!
 //! # Active set and outer loops
 //! * Multiplier: the switch of [`multiplier`] is re-evaluated every iteration (primal–dual active
-//!   set). A node changing status more than [`MAX_SWITCHES`] times in an increment is frozen in its
-//!   current status for the rest of the increment (cycling), and counted in the iteration log.
+//!   set); penalty and augmented: a node is closed while `P ≤ 0` (`λ̂ ≤ 0`). A node changing status
+//!   more than [`MAX_SWITCHES`] times in an increment is frozen for the rest of the increment
+//!   (cycling) and counted in the iteration log: a multiplier node in the status it wanted at that
+//!   change, a penalty or augmented node closed (its force `λ̂∇P` then acts at `P > 0` too, a small
+//!   pull). A node at the edge of the contact zone otherwise opens, closes deep (its open Newton
+//!   step carries it through the master) and opens again every third iteration.
 //! * Augmented Lagrangian: after Newton converged, if the largest penetration exceeds the pair's
 //!   tolerance, every node's estimate takes the Uzawa update `λ_k ← min(0, λ_k + αP)` and the
 //!   increment is solved again (outer loop of [`crate::driver`]).
