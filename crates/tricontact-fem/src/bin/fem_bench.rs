@@ -11,16 +11,15 @@
 //! as ASCII and as binary, and prints the sizes;
 //! `--contact N [M]` only times a contact run: an `M × M × 2` hex8 block (default `M = N − 1`)
 //! pressed onto an `N × N × 2` one, `(M + 1)²` slave nodes, with Lagrange multipliers and with
-//! a penalty (one increment each); with `--multipliers-last` the multipliers are ordered after
-//! all displacements, as before they followed their slave nodes.
+//! a penalty (one increment each); with `--multipliers-last` the multipliers are all ordered
+//! after the displacements (the former ordering), for comparison.
 
 use std::time::Instant;
 
 use tricontact_fem::analysis::Analysis;
 use tricontact_fem::assembly::{DofMap, ExtraTerms, NoExtra, Pattern, assemble, node_adjacency};
 use tricontact_fem::contact::ContactTerms;
-use tricontact_fem::driver::run;
-use tricontact_fem::driver::{external_forces, step_constraints};
+use tricontact_fem::driver::{external_forces, run, step_constraints};
 use tricontact_fem::linsolve::{LinearSolver, Structure};
 use tricontact_fem::mesh::ElementKind;
 use tricontact_fem::model::Model;
@@ -135,8 +134,8 @@ fn contact_model(method: &str) -> String {
     )
 }
 
-/// Contact terms whose multipliers are ordered after all displacements (the ordering before
-/// multipliers followed their slave nodes' blocks), for comparison: everything else delegates.
+/// Contact terms whose multipliers are all ordered after the displacements (the former ordering),
+/// for comparison: everything else delegates.
 struct MultipliersLast(ContactTerms);
 
 impl ExtraTerms for MultipliersLast {
