@@ -42,8 +42,9 @@ pub trait ExtraTerms: Send {
         0
     }
     /// The node each extra unknown belongs to (`None`: none), for the equation
-    /// ordering: an unknown follows its node's equations (see
-    /// [`crate::ordering::equation_order`]). By default none belongs to a node.
+    /// ordering: an unknown follows the nested-dissection block of its node, the
+    /// others come last (see [`crate::ordering::equation_order`]). By default
+    /// none belongs to a node.
     fn extra_nodes(&self) -> Vec<Option<usize>> {
         Vec::new()
     }
