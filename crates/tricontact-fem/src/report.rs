@@ -231,6 +231,7 @@ impl RunRecord {
     }
 }
 
+/// The axes of a Newton-convergence chart (relative residual per iteration, log scale).
 fn newton_axes() -> Axes<'static> {
     Axes {
         title: "Newton convergence",
