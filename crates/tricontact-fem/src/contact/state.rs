@@ -28,6 +28,8 @@ pub struct NodeState {
     pub facet_switches: u32,
     /// Facet frozen for the rest of the increment after cycling.
     pub facet_frozen: bool,
+    /// The facet the node left at its last facet change in this increment (two-cycle detection).
+    pub left_facet: Option<u32>,
     /// Small sliding: facet, shape functions and normal at the start of the increment.
     pub start: Option<(u32, [f64; 3], [f64; 3])>,
 }
