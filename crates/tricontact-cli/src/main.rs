@@ -4,7 +4,8 @@
 //! writes VTU/PVD/history.csv/newton.csv (and the Hertz tables and PNG plots when the model
 //! asks); `tricontact check MODEL` parses and validates it and prints a summary with every
 //! problem found; `tricontact plot DIR...` overlays the Newton residuals of one increment of
-//! several result folders. Exit code 0 on success; on failure 1 with a one-line cause on stderr.
+//! several result folders; `tricontact export MODEL [-o DECK.inp]` writes the model as a
+//! CalculiX input deck. Exit code 0 on success; on failure 1 with a one-line cause on stderr.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -18,7 +19,7 @@ use tricontact_fem::hertz::HertzSetup;
 use tricontact_fem::model::Model;
 use tricontact_fem::output::ResultWriter;
 use tricontact_fem::report::{self, RunRecord};
-use tricontact_fem::{FemError, gmsh, rigid};
+use tricontact_fem::{FemError, atomic, gmsh, inp, rigid};
 
 /// `println!` that ends the program quietly when standard output is closed (e.g. piped into
 /// `head`), instead of panicking: results are written atomically, so nothing is left half-written.
@@ -69,6 +70,17 @@ enum Command {
         #[arg(long)]
         mesh: Option<PathBuf>,
     },
+    /// Write the model as a CalculiX (Abaqus-format) input deck, to cross-check with `ccx`.
+    Export {
+        /// Model file (TOML).
+        model: PathBuf,
+        /// Deck to write (default: the model file with the extension `.inp`).
+        #[arg(long, short)]
+        output: Option<PathBuf>,
+        /// Mesh file to use instead of `[mesh] file` (relative to the current folder).
+        #[arg(long)]
+        mesh: Option<PathBuf>,
+    },
     /// Overlay the Newton residuals of one increment of several result folders (PNG).
     Plot {
         /// Result folders written by `tricontact run` (each holds `newton.csv`).
@@ -106,6 +118,11 @@ fn main() -> ExitCode {
         } => set_threads(threads)
             .and_then(|()| run(&model, output, mesh, verbose).map_err(|e| e.to_string())),
         Command::Check { model, mesh } => check(&model, mesh).map_err(|e| e.to_string()),
+        Command::Export {
+            model,
+            output,
+            mesh,
+        } => export(&model, output, mesh),
         Command::Plot {
             folders,
             increment,
@@ -246,6 +263,30 @@ fn run(
         summary.cutbacks,
         dir.display()
     );
+    Ok(())
+}
+
+fn export(
+    model_path: &Path,
+    output: Option<PathBuf>,
+    mesh_override: Option<PathBuf>,
+) -> Result<(), String> {
+    let model =
+        Model::load_with_mesh(model_path, mesh_override.as_deref()).map_err(|e| e.to_string())?;
+    let mesh = gmsh::read_msh(&model.mesh_path()).map_err(|e| e.to_string())?;
+    let an = Analysis::new(&model, mesh).map_err(|e| e.to_string())?;
+    let title = format!(
+        "{} (mesh {})",
+        model_path.display(),
+        model.mesh_path().display()
+    );
+    let deck = inp::write(&an, &title).map_err(|e| format!("{}: {e}", model_path.display()))?;
+    let path = output.unwrap_or_else(|| model_path.with_extension("inp"));
+    atomic::write_atomic(&path, deck.text.as_bytes()).map_err(|e| e.to_string())?;
+    for note in &deck.notes {
+        say!("note: {note}");
+    }
+    say!("wrote {}", path.display());
     Ok(())
 }
 

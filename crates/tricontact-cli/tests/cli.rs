@@ -423,3 +423,51 @@ fn verbose_log_names_each_cut_back_attempt() {
     );
     std::fs::remove_dir_all(&out).ok();
 }
+
+#[test]
+fn export_writes_a_calculix_deck_and_names_what_it_cannot() {
+    let dir = temp_dir("export");
+    let deck = dir.join("blocks.inp");
+    let model = examples_dir().join("contact-block/model.toml");
+    let stdout = run_ok(&[
+        "export".as_ref(),
+        model.as_os_str(),
+        "-o".as_ref(),
+        deck.as_os_str(),
+    ]);
+    // neo-Hooke and multipliers are approximations: each is printed as a note.
+    assert!(stdout.contains("NEO HOOKE"), "{stdout}");
+    assert!(stdout.contains("Multiplier exported"), "{stdout}");
+    let text = std::fs::read_to_string(&deck).expect("deck written");
+    assert!(text.starts_with("*HEADING"));
+    assert_eq!(text.matches("*STEP").count(), 2);
+    assert!(text.contains("TYPE=NODE TO SURFACE"));
+    // A follower pressure in an nlgeom step cannot be exported: exit 1, one line, no file.
+    let bad = dir.join("follower.toml");
+    let mut src =
+        std::fs::read_to_string(examples_dir().join("block-stretch/model.toml")).expect("model");
+    src = src.replace("pressure = 0.5", "pressure = 0.5\nfollower = true");
+    src = src.replace(
+        "\"block.msh\"",
+        &format!("{:?}", examples_dir().join("block-stretch/block.msh")),
+    );
+    std::fs::write(&bad, src).expect("write model");
+    let out = dir.join("follower.inp");
+    let o = bin()
+        .args([
+            "export".as_ref(),
+            bad.as_os_str(),
+            "-o".as_ref(),
+            out.as_os_str(),
+        ])
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        stderr.contains("load 'top' is a follower pressure"),
+        "{stderr}"
+    );
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(!out.exists());
+}

@@ -22,6 +22,7 @@ pub mod follower;
 pub mod gmsh;
 pub mod hertz;
 pub mod hex8;
+pub mod inp;
 pub mod linear_elastic;
 pub mod linsolve;
 pub mod loads;

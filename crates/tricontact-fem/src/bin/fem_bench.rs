@@ -12,8 +12,11 @@
 //! `--contact N [M]` only times a contact run: an `M × M × 2` hex8 block (default `M = N − 1`)
 //! pressed onto an `N × N × 2` one, `(M + 1)²` slave nodes, with Lagrange multipliers and with
 //! a penalty (one increment each); with `--multipliers-last` the multipliers are all ordered
-//! after the displacements (the former ordering), for comparison.
+//! after the displacements (the former ordering), for comparison;
+//! `--inp FILE` writes, instead of solving, the CalculiX input deck of the cube (or with
+//! `--contact`, of the penalty contact run), for `scripts/compare-calculix.sh`.
 
+use std::path::PathBuf;
 use std::time::Instant;
 
 use tricontact_fem::analysis::Analysis;
@@ -179,6 +182,34 @@ impl ExtraTerms for MultipliersLast {
     }
 }
 
+/// The path given after `--inp`, if any.
+fn inp_path() -> Option<PathBuf> {
+    std::env::args()
+        .skip_while(|a| a != "--inp")
+        .nth(1)
+        .map(PathBuf::from)
+}
+
+/// Writes the CalculiX deck of `an` to `path` and prints what it approximates.
+fn write_deck(an: &Analysis, path: &std::path::Path, title: &str) {
+    match tricontact_fem::inp::write(an, title) {
+        Ok(deck) => {
+            for note in &deck.notes {
+                println!("note: {note}");
+            }
+            if let Err(e) = tricontact_fem::atomic::write_atomic(path, deck.text.as_bytes()) {
+                eprintln!("error: {e}");
+                std::process::exit(1);
+            }
+            println!("wrote {}", path.display());
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::exit(1);
+        }
+    }
+}
+
 /// Times a contact run with multipliers and with a penalty on two stacked hex8 blocks.
 fn contact_run(n: usize, m: usize) {
     let lower = box_mesh([1.0, 1.0, 0.2], [n, n, 2], ElementKind::Hex8);
@@ -190,6 +221,16 @@ fn contact_run(n: usize, m: usize) {
         (m + 1) * (m + 1),
         rayon::current_num_threads()
     );
+    if let Some(path) = inp_path() {
+        let model = Model::parse(
+            &contact_model("penalty"),
+            std::path::Path::new("bench.toml"),
+        )
+        .expect("valid model");
+        let an = Analysis::new(&model, mesh).expect("valid analysis");
+        write_deck(&an, &path, &format!("fem-bench --contact {n} {m}, penalty"));
+        return;
+    }
     let last = std::env::args().any(|a| a == "--multipliers-last");
     for method in ["multiplier", "penalty"] {
         let model = Model::parse(&contact_model(method), std::path::Path::new("bench.toml"))
@@ -202,14 +243,24 @@ fn contact_run(n: usize, m: usize) {
         };
         let t = Instant::now();
         let mut factor = String::new();
+        let mut force = f64::NAN;
+        let mut history = String::new();
+        let pressed = &an.boundaries[1].nodes;
         let summary = run(&an, terms.as_mut(), &mut |info| {
             factor = info.method.to_string();
+            force = pressed.iter().map(|&a| info.reactions[3 * a + 2]).sum();
+            history = info
+                .relative_residuals()
+                .iter()
+                .map(|r| format!("{r:.1e}"))
+                .collect::<Vec<_>>()
+                .join(" ");
             Ok(())
         });
         let secs = t.elapsed().as_secs_f64();
         match summary {
             Ok(s) => println!(
-                "{method:>10}{}: {secs:>8.2} s, {} Newton iterations ({:.2} s each), {} cutbacks, {factor}",
+                "{method:>10}{}: {secs:>8.2} s, {} Newton iterations ({:.2} s each), {} cutbacks, {factor}, reaction on the pressed face {force:.6e}; relative residuals [{history}]",
                 if last && method == "multiplier" {
                     " (last)"
                 } else {
@@ -276,6 +327,10 @@ fn main() {
         }
     };
     let setup = t.elapsed();
+    if let Some(path) = inp_path() {
+        write_deck(&an, &path, &format!("fem-bench {n}: hex8 cube"));
+        return;
+    }
     let (mask, _) = step_constraints(&an, 0);
     let dm = DofMap::new(&an.active_nodes, &mask, 0);
     let t = Instant::now();

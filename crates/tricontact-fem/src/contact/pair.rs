@@ -52,6 +52,10 @@ pub struct Pass {
 pub struct ContactPair {
     /// `slave-master`, used in history columns.
     pub name: String,
+    /// The slave group (surface or node set) as named in the model.
+    pub slave_group: String,
+    /// The master surface group as named in the model.
+    pub master_group: String,
     /// Enforcement method.
     pub method: ContactMethod,
     /// Penalty factor `α` (force per length).
@@ -423,6 +427,8 @@ pub fn resolve(
     }
     Ok(ContactPair {
         name,
+        slave_group: def.slave.clone(),
+        master_group: def.master.clone(),
         method: def.method,
         penalty,
         tolerance: def.tolerance * h_mean,
