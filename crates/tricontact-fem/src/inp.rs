@@ -211,7 +211,7 @@ impl<'a> Deck<'a> {
             let _ = writeln!(self.model, "*MATERIAL, NAME=MAT{}", m + 1);
             match mat.law {
                 Law::LinearElastic => {
-                    let e = mu * (3.0 * lambda + 2.0 * mu) / (lambda + mu);
+                    let e = youngs_modulus(mat);
                     let nu = lambda / (2.0 * (lambda + mu));
                     let _ = writeln!(self.model, "*ELASTIC\n{e:.12e}, {nu:.12e}");
                 }
@@ -247,12 +247,13 @@ impl<'a> Deck<'a> {
                 pair.name, pair.method, pair.penalty
             ));
         }
-        let youngs = self
-            .an
-            .materials
-            .iter()
-            .map(|m| m.mu * (3.0 * m.lambda + 2.0 * m.mu) / (m.lambda + m.mu));
-        let tension = 2.5e-5 * youngs.fold(0.0, f64::max);
+        let tension = 2.5e-5
+            * self
+                .an
+                .materials
+                .iter()
+                .map(youngs_modulus)
+                .fold(0.0, f64::max);
         let master = self.face_surface(p, "M", &pair.master_group, pass)?;
         let slave = self.node_surface(p, &pair.slave_group, &pass.slaves);
         let _ = writeln!(
@@ -564,6 +565,11 @@ impl<'a> Deck<'a> {
             let _ = writeln!(h, "*END STEP");
         }
     }
+}
+
+/// Young's modulus `E = μ(3λ + 2μ)/(λ + μ)` of a material given by its Lamé constants.
+fn youngs_modulus(m: &crate::material::Material) -> f64 {
+    m.mu * (3.0 * m.lambda + 2.0 * m.mu) / (m.lambda + m.mu)
 }
 
 fn boundary_set(k: usize, name: &str) -> String {
