@@ -35,8 +35,10 @@
 //!   extruded nodes are held as their originals are.
 //!
 //! # Not exportable
-//! Follower pressures acting in an `nlgeom` step, and a volume-less master surface whose nodes are
-//! not all held in every step: [`write`] returns an error naming them.
+//! Follower pressures acting in an `nlgeom` step, and a master surface with faces of no body
+//! element whose nodes are not all held in every step (a rigid surface always is: the model check
+//! requires it; a surface mixing body faces with other faces may not be): [`write`] returns an
+//! error naming them.
 //!
 //! Set names are the group names reduced to letters, digits and `_` (CalculiX names are
 //! case-insensitive), prefixed by the kind of set and its position, so that they stay unique.
@@ -291,13 +293,7 @@ impl<'a> Deck<'a> {
     /// none of them is softer than here.
     fn slope(&mut self, pair: &ContactPair) -> Result<f64, InpError> {
         let pass = &pair.passes[0];
-        let x: Vec<tricontact::Vec3> = self
-            .an
-            .mesh
-            .nodes
-            .iter()
-            .map(|p| tricontact::Vec3::new(p[0], p[1], p[2]))
-            .collect();
+        let x = crate::contact::pair::positions(&self.an.mesh);
         let bvh = Bvh::build(&pass.surface, &x, pass.radius)
             .map_err(|e| InpError(format!("contact '{}': {e}", pair.name)))?;
         let near: Vec<f64> = pass
@@ -347,14 +343,14 @@ impl<'a> Deck<'a> {
         let Some(g) = self.an.mesh.group(group) else {
             return Err(InpError(format!("unknown surface group '{group}'")));
         };
-        let on_body = g
+        let faces: Option<Vec<(usize, usize)>> = g
             .elements
             .iter()
-            .all(|&f| self.body_face(&self.an.mesh.elements[f]).is_some());
-        if on_body {
-            self.body_face_surface(p, tag, group)
-        } else {
-            self.wedge_surface(p, tag, group, pass)
+            .map(|&f| self.body_face(&self.an.mesh.elements[f]))
+            .collect();
+        match faces {
+            Some(faces) => Ok(self.body_face_surface(p, tag, group, &faces)),
+            None => self.wedge_surface(p, tag, group, pass),
         }
     }
 
@@ -367,25 +363,20 @@ impl<'a> Deck<'a> {
         })
     }
 
-    fn body_face_surface(&mut self, p: usize, tag: &str, group: &str) -> Result<String, InpError> {
-        let an = self.an;
-        let g = an
-            .mesh
-            .group(group)
-            .ok_or_else(|| InpError(format!("unknown surface group '{group}'")))?;
+    /// The surface `(body element, face number)` of `faces`, named after `group`.
+    fn body_face_surface(
+        &mut self,
+        p: usize,
+        tag: &str,
+        group: &str,
+        faces: &[(usize, usize)],
+    ) -> String {
         let name = format!("SURF{}_{tag}_{}", p + 1, clean(group));
         let _ = writeln!(self.model, "*SURFACE, NAME={name}");
-        for &f in &g.elements {
-            let face = &an.mesh.elements[f];
-            let (b, s) = self.body_face(face).ok_or_else(|| {
-                InpError(format!(
-                    "face {} of surface '{group}' is not the face of a body element",
-                    face.tag
-                ))
-            })?;
+        for (b, s) in faces {
             let _ = writeln!(self.model, "{}, S{s}", b + 1);
         }
-        Ok(name)
+        name
     }
 
     /// A volume-less (rigid) master: one wedge per facet, extruded inwards.
@@ -410,7 +401,7 @@ impl<'a> Deck<'a> {
             for a in [i, j, k].map(|a| a as usize) {
                 if !masks.iter().all(|m| m[3 * a..3 * a + 3].iter().all(|&h| h)) {
                     return Err(InpError(format!(
-                        "surface '{group}' has no volume and its node {} is not held in every step",
+                        "surface '{group}' has faces of no body element (exported as wedges) and its node {} is not held in every step",
                         an.mesh.node_tags[a]
                     )));
                 }

@@ -386,3 +386,47 @@ fn a_rigid_surface_in_two_pairs_is_extruded_once() {
         an.active_nodes.iter().filter(|&&a| a).count() + flat_nodes.len()
     );
 }
+
+#[test]
+fn a_master_face_of_no_element_with_free_nodes_is_refused() {
+    use tricontact_fem::mesh::Element;
+    let lower = box_mesh([1.0, 1.0, 0.2], [2, 2, 2], ElementKind::Hex8);
+    let upper = box_mesh([0.9, 0.9, 0.2], [2, 2, 2], ElementKind::Hex8);
+    let mut mesh = stack(&lower, &upper, [0.05, 0.05, 0.2]);
+    // A triangle inside the lower block across two elements (its nodes at z = 0.1 are a body's
+    // free nodes, and it is no element's face), added to the master group: it can only be
+    // exported as a wedge, whose nodes are not held.
+    let pick = |x: f64, y: f64| {
+        (0..mesh.nodes.len())
+            .find(|&a| {
+                let p = mesh.nodes[a];
+                (p[0] - x).abs() < 1e-9 && (p[1] - y).abs() < 1e-9 && (p[2] - 0.1).abs() < 1e-9
+            })
+            .expect("grid node")
+    };
+    mesh.elements.push(Element {
+        kind: ElementKind::Tri3,
+        nodes: vec![pick(0.0, 0.0), pick(1.0, 0.0), pick(1.0, 1.0)],
+        tag: 999_999,
+    });
+    let index = mesh.elements.len() - 1;
+    let g = mesh
+        .groups
+        .iter_mut()
+        .find(|g| g.name == "lower_zmax")
+        .expect("group");
+    g.elements.push(index);
+    let text = "[mesh]\nfile = \"none\"\n\
+        [[material]]\nname = \"m\"\ntype = \"linear_elastic\"\nE = 1000.0\nnu = 0.3\n\
+        [[body]]\ngroup = \"lower_solid\"\nmaterial = \"m\"\n\
+        [[body]]\ngroup = \"upper_solid\"\nmaterial = \"m\"\n\
+        [[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n\
+        [[boundary]]\ngroup = \"upper_zmax\"\ndisplacement = { z = -0.002 }\n\
+        [[contact]]\nslave = \"upper_zmin\"\nmaster = \"lower_zmax\"\nmethod = \"penalty\"\n\
+        [[step]]\n";
+    let model = Model::parse(text, Path::new("m.toml")).expect("model");
+    let an = Analysis::new(&model, mesh).expect("analysis");
+    let err = inp::write(&an, "mixed").expect_err("unheld wedge nodes");
+    assert!(err.to_string().contains("surface 'lower_zmax'"), "{err}");
+    assert!(err.to_string().contains("not held"), "{err}");
+}

@@ -190,7 +190,8 @@ fn edge_lengths(mesh: &Mesh, facets: &[[u32; 3]]) -> (f64, f64) {
     (sum / n.max(1) as f64, max)
 }
 
-fn positions(mesh: &Mesh) -> Vec<Vec3> {
+/// The mesh's node coordinates as kernel vectors.
+pub(crate) fn positions(mesh: &Mesh) -> Vec<Vec3> {
     mesh.nodes
         .iter()
         .map(|p| Vec3::new(p[0], p[1], p[2]))
