@@ -325,7 +325,7 @@ fn check(model_path: &Path, mesh_override: Option<PathBuf>) -> Result<(), FemErr
     for pair in &an.contacts {
         let facets: usize = pair.passes.iter().map(|p| p.surface.len()).sum();
         say!(
-            "contact {}: {:?}, {} slave nodes, {} facets, {} pass(es), penalty {:.3e}, mean facet edge {:.3e}",
+            "contact {}: {}, {} slave nodes, {} facets, {} pass(es), penalty {:.3e}, mean facet edge {:.3e}",
             pair.name,
             pair.method,
             pair.passes[0].slaves.len(),

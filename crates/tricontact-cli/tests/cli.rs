@@ -439,7 +439,7 @@ fn export_writes_a_calculix_deck_and_names_what_it_cannot() {
     ]);
     // neo-Hooke and multipliers are approximations: each is printed as a note.
     assert!(stdout.contains("NEO HOOKE"), "{stdout}");
-    assert!(stdout.contains("Multiplier exported"), "{stdout}");
+    assert!(stdout.contains("method multiplier exported"), "{stdout}");
     let text = std::fs::read_to_string(&deck).expect("deck written");
     assert!(text.starts_with("*HEADING"));
     assert_eq!(text.matches("*STEP").count(), 2);

@@ -245,7 +245,7 @@ impl<'a> Deck<'a> {
         let slope = self.slope(pair)?;
         if pair.method != ContactMethod::Penalty {
             self.notes.push(format!(
-                "contact '{}': {:?} exported as CalculiX's node-to-surface penalty with α = {:e}",
+                "contact '{}': method {} exported as CalculiX's node-to-surface penalty with α = {:e}",
                 pair.name, pair.method, pair.penalty
             ));
         }

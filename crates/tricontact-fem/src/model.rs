@@ -171,6 +171,24 @@ pub enum ContactMethod {
     Augmented,
 }
 
+impl ContactMethod {
+    /// The method as the model file spells it (`method = "…"`).
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Penalty => "penalty",
+            Self::Multiplier => "multiplier",
+            Self::Augmented => "augmented",
+        }
+    }
+}
+
+impl std::fmt::Display for ContactMethod {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// `[[contact]]`.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]

@@ -189,7 +189,11 @@ fn hex8_contact_deck_has_the_master_faces_the_slave_nodes_and_the_steps() {
         .expect("surface behaviour");
     let slope: f64 = behaviour[0][0].parse().expect("slope");
     assert!((slope - pair.penalty / least).abs() <= 1e-10 * slope);
-    assert!(deck.notes.iter().any(|n| n.contains("Multiplier exported")));
+    assert!(
+        deck.notes
+            .iter()
+            .any(|n| n.contains("method multiplier exported"))
+    );
     // Material and step.
     let (_, elastic) = b.iter().find(|(k, _)| k == "*ELASTIC").expect("elastic");
     let e: f64 = elastic[0][0].parse().expect("E");
