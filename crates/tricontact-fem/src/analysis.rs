@@ -17,7 +17,7 @@ use crate::error::{FemError, Result};
 use crate::loads;
 use crate::material::{Law, Material};
 use crate::mesh::{ElementKind, Mesh};
-use crate::model::{MaterialKind, Model, OutputDef};
+use crate::model::{Extrapolation, MaterialKind, Model, OutputDef};
 use crate::shape::{self, QPoint};
 
 /// A volume element taking part in the analysis.
@@ -73,6 +73,8 @@ pub struct Step {
     pub nlgeom: bool,
     /// Allowed halvings of an increment.
     pub max_cutbacks: usize,
+    /// Newton's starting point of an increment.
+    pub extrapolation: Extrapolation,
 }
 
 /// Everything the solver needs, resolved to indices.
@@ -174,6 +176,7 @@ impl Analysis {
                 displacement_tolerance: s.displacement_tolerance,
                 nlgeom: s.nlgeom,
                 max_cutbacks: s.max_cutbacks,
+                extrapolation: s.extrapolation,
             })
             .collect();
         for s in &steps {

@@ -16,11 +16,19 @@
 //! restored on a cutback. When the extra terms ask for another solve after
 //! Newton converged (an Uzawa update), the increment is solved again from the
 //! converged state, at most [`MAX_OUTER`] times.
+//!
+//! Starting point ([`Extrapolation`]): with `linear` (the default), Newton
+//! starts increment `n + 1` of a step from `u_n + (Δt_{n+1}/Δt_n)(u_n − u_{n−1})`,
+//! all unknowns (multipliers too), so that a motion that carries on — a
+//! slider moving on, a load growing — begins where the last increment points.
+//! The first increment of a step and the retry after a cutback start from
+//! `u_n`, as with `none`.
 
 use crate::analysis::{Analysis, Load};
 use crate::assembly::{DofMap, ExtraTerms, Pattern, node_adjacency};
 use crate::error::{FemError, Result};
 use crate::linsolve::LinearSolver;
+use crate::model::Extrapolation;
 use crate::newton::{Converged, Failure, IncrementProblem, solve_increment};
 use crate::ordering::equation_order;
 use crate::rigid::check_supports;
@@ -261,6 +269,8 @@ pub fn run(
         let mut t = 0.0;
         let mut increment = 0;
         let mut attempts: Vec<(f64, String)> = Vec::new();
+        // The last converged increment of this step: `u_n − u_{n−1}` and its `Δt`.
+        let mut last: Option<(Vec<f64>, f64)> = None;
         while t < 1.0 - 1e-12 {
             let t_new = control.target(t);
             let mut fext = external_forces(an, n_dofs, s, t_new);
@@ -281,9 +291,17 @@ pub fn run(
                 prescribed: &prescribed,
                 follower: &follower,
             };
-            match solve_with_outer(&problem, extra, &u, &mut solver) {
+            let start = match (&last, step.extrapolation, attempts.is_empty()) {
+                (Some((du, dt)), Extrapolation::Linear, true) => {
+                    extrapolated(&u, du, (t_new - t) / dt)
+                }
+                _ => u.clone(),
+            };
+            match solve_with_outer(&problem, extra, &u, &start, &mut solver) {
                 Ok(c) => {
                     extra.commit();
+                    let du = c.u.iter().zip(&u).map(|(a, b)| a - b).collect();
+                    last = Some((du, t_new - t));
                     u = c.u;
                     t = t_new;
                     increment += 1;
@@ -341,17 +359,23 @@ pub fn run(
     Ok(summary)
 }
 
-/// One increment: Newton, repeated from the converged state while the extra
-/// terms ask for it (outer loop). Residual histories and iteration counts of
-/// the solves are concatenated.
+/// `u + ratio · du`: the start of an increment extrapolated from the last one.
+fn extrapolated(u: &[f64], du: &[f64], ratio: f64) -> Vec<f64> {
+    u.iter().zip(du).map(|(a, d)| a + ratio * d).collect()
+}
+
+/// One increment from the committed `u0`, Newton starting at `start`, repeated
+/// from the converged state while the extra terms ask for it (outer loop).
+/// Residual histories and iteration counts of the solves are concatenated.
 fn solve_with_outer(
     problem: &IncrementProblem<'_>,
     extra: &mut dyn ExtraTerms,
     u0: &[f64],
+    start: &[f64],
     solver: &mut LinearSolver,
 ) -> std::result::Result<Converged, Failure> {
     extra.begin_increment(u0).map_err(Failure::Diverged)?;
-    let mut c = solve_increment(problem, extra, u0, u0, solver)?;
+    let mut c = solve_increment(problem, extra, u0, start, solver)?;
     let mut outer = 0;
     while !extra.after_converged(&c.u).map_err(Failure::Diverged)? {
         outer += 1;

@@ -245,6 +245,22 @@ pub struct StepDef {
     /// How many times an increment may be halved.
     #[serde(default = "default_cutbacks")]
     pub max_cutbacks: usize,
+    /// Newton's starting point for the second and later increments of the step.
+    #[serde(default)]
+    pub extrapolation: Extrapolation,
+}
+
+/// Where Newton starts an increment (`[[step]] extrapolation`).
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum Extrapolation {
+    /// From the last converged state plus the previous increment of the step, scaled to the new
+    /// increment's size (the first increment of a step, and the retry after a cutback, start from
+    /// the last converged state).
+    #[default]
+    Linear,
+    /// From the last converged state.
+    None,
 }
 
 fn default_increments() -> usize {
