@@ -74,6 +74,8 @@ pub const MAX_SWITCHES: u32 = 4;
 #[derive(Clone, Debug)]
 pub struct ContactTerms {
     reference: Vec<[f64; 3]>,
+    /// Gmsh node tags, for messages.
+    node_tags: Vec<u64>,
     pairs: Vec<ContactPair>,
     /// Offset of each pair's multipliers among the extra unknowns.
     offsets: Vec<usize>,
@@ -119,6 +121,7 @@ impl ContactTerms {
         }
         Self {
             reference: an.mesh.nodes.clone(),
+            node_tags: an.mesh.node_tags.clone(),
             pairs,
             offsets,
             n_extra,
@@ -217,6 +220,30 @@ impl ContactTerms {
             let w = Vec3::new(normal[0], normal[1], normal[2]);
             Some((f, nodes, Gap::linear(xf, x[s], shape, w)))
         }
+    }
+}
+
+impl ContactTerms {
+    /// Checks the nodes held closed after cycling at a converged state: a node may be held
+    /// closed only while it still presses, or pulls by less than the pair's `tolerance`
+    /// measured as a gap, `λ/α` (the gap itself with a penalty). A larger pull means the held
+    /// status is wrong, and the increment fails (it is cut back) instead of ending with a node
+    /// glued to the master.
+    fn check_held_nodes(&self) -> Result<(), String> {
+        for (p, pair) in self.pairs.iter().enumerate() {
+            for (q, pass) in pair.passes.iter().enumerate() {
+                for (j, st) in self.trial[p][q].iter().enumerate() {
+                    let pull = st.lambda / pair.penalty;
+                    if st.frozen == Some(true) && st.active && pull > pair.tolerance {
+                        return Err(format!(
+                            "contact '{}': slave node {} was held closed after cycling and pulls at convergence (λ/α = {pull:.3e} > tolerance {:.3e})",
+                            pair.name, self.node_tags[pass.slaves[j]], pair.tolerance
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(())
     }
 }
 
@@ -429,7 +456,7 @@ impl ExtraTerms for ContactTerms {
                             let want = eval.as_ref().is_some_and(|(_, _, g)| {
                                 multiplier::wants_active(g.gap(), lambda, alpha)
                             });
-                            let act = settle(st, was_active, want, want) && eval.is_some();
+                            let act = settle(st, was_active, want, true) && eval.is_some();
                             if st.frozen.is_some() {
                                 frozen += 1;
                             }
@@ -488,6 +515,7 @@ impl ExtraTerms for ContactTerms {
     }
 
     fn after_converged(&mut self, _u: &[f64]) -> Result<bool, String> {
+        self.check_held_nodes()?;
         let mut done = true;
         for (p, pair) in self.pairs.iter().enumerate() {
             if pair.method != ContactMethod::Augmented {
@@ -528,5 +556,56 @@ impl ExtraTerms for ContactTerms {
 
     fn history(&self) -> Vec<(String, f64)> {
         self.columns()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Model;
+
+    /// The multiplier patch model, its contact terms evaluated once at the reference state.
+    fn patch_terms() -> ContactTerms {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../examples/patch/multiplier.toml");
+        let model = Model::load(&path).expect("patch model");
+        let mesh = crate::gmsh::read_msh(&model.mesh_path()).expect("patch mesh");
+        let an = Analysis::new(&model, mesh).expect("patch analysis");
+        let mut terms = ContactTerms::new(&an);
+        let u = vec![0.0; 3 * an.mesh.nodes.len() + terms.num_extra()];
+        terms.begin_increment(&u).expect("begin");
+        let (mut r, mut k) = (vec![0.0; u.len()], Vec::new());
+        terms.add_terms(&u, &mut r, &mut k).expect("terms");
+        terms
+    }
+
+    #[test]
+    fn a_node_held_closed_may_not_pull_beyond_the_tolerance() {
+        let mut terms = patch_terms();
+        assert_eq!(terms.after_converged(&[]), Ok(true), "nothing held");
+        let (alpha, tol) = (terms.pairs[0].penalty, terms.pairs[0].tolerance);
+        let tag = terms.node_tags[terms.pairs[0].passes[0].slaves[3]];
+        let st = &mut terms.trial[0][0][3];
+        st.frozen = Some(true);
+        st.active = true;
+        st.lambda = -5.0 * alpha * tol;
+        assert_eq!(terms.after_converged(&[]), Ok(true), "pressing");
+        terms.trial[0][0][3].lambda = 0.5 * alpha * tol;
+        assert_eq!(
+            terms.after_converged(&[]),
+            Ok(true),
+            "a pull within the tolerance"
+        );
+        terms.trial[0][0][3].lambda = 2.0 * alpha * tol;
+        let err = terms
+            .after_converged(&[])
+            .expect_err("a pull beyond the tolerance");
+        assert!(err.contains(&format!("slave node {tag} ")), "{err}");
+        terms.trial[0][0][3].frozen = None;
+        assert_eq!(
+            terms.after_converged(&[]),
+            Ok(true),
+            "not held: its own status"
+        );
     }
 }

@@ -10,7 +10,8 @@
 //! * `contact_facet`: Gmsh tag of the master face a closed slave node is on (0 when open).
 //!
 //! History columns per pair `<slave>-<master>`: `_normal_force` (`Σ −λ` over all slave nodes and
-//! passes), `_active` (closed nodes), `_max_penetration` (`max(0, −P)` over closed nodes), `_area`
+//! passes), `_active` (closed nodes), `_max_penetration` (`max(0, −P)` over every slave node with a facet, open
+//! or closed, so that a node left open inside the master shows), `_area`
 //! (lumped area of the closed nodes), `_min_pressure` and `_max_pressure` (`contact_pressure` over
 //! the closed slave nodes that have an area; 0 when there are none).
 
@@ -70,9 +71,11 @@ impl ContactTerms {
             for (q, pass) in pair.passes.iter().enumerate() {
                 for (j, st) in self.committed[p][q].iter().enumerate() {
                     force -= st.lambda;
+                    if st.facet.is_some() {
+                        pen = pen.max(-st.gap);
+                    }
                     if st.active {
                         active += 1;
-                        pen = pen.max(-st.gap);
                         area += pass.areas[j];
                         if let Some(p) = self.pressure(pass.slaves[j]) {
                             p_min = p_min.min(p);

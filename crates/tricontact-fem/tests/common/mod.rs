@@ -108,13 +108,7 @@ pub fn run_example(
     model: &str,
     mesh: Option<&str>,
 ) -> (RunSummary, tricontact_fem::report::RunRecord) {
-    let folder = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples")
-        .join(dir);
-    let mesh = mesh.map(|f| folder.join(f));
-    let m = Model::load_with_mesh(&folder.join(model), mesh.as_deref()).expect("example model");
-    let mesh = tricontact_fem::gmsh::read_msh(&m.mesh_path()).expect("example mesh");
-    let an = Analysis::new(&m, mesh).expect("example analysis");
+    let (m, an) = example(dir, model, mesh);
     let hertz = m
         .hertz
         .as_ref()
@@ -127,6 +121,39 @@ pub fn run_example(
     })
     .expect("example runs");
     (summary, record)
+}
+
+/// `examples/<dir>/<model>` (with `mesh` instead of its `[mesh] file` when given), resolved.
+pub fn example(dir: &str, model: &str, mesh: Option<&str>) -> (Model, Analysis) {
+    let folder = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples")
+        .join(dir);
+    let mesh = mesh.map(|f| folder.join(f));
+    let m = Model::load_with_mesh(&folder.join(model), mesh.as_deref()).expect("example model");
+    let mesh = tricontact_fem::gmsh::read_msh(&m.mesh_path()).expect("example mesh");
+    let an = Analysis::new(&m, mesh).expect("example analysis");
+    (m, an)
+}
+
+/// Runs an example analysis with its contact pairs; returns the summary and, per converged
+/// increment, its time and the contact history columns.
+pub fn contact_history(an: &Analysis) -> (RunSummary, Vec<(f64, Vec<(String, f64)>)>) {
+    let mut terms = tricontact_fem::contact::ContactTerms::new(an);
+    let mut rows = Vec::new();
+    let summary = run(an, &mut terms, &mut |info| {
+        rows.push((info.time, info.history.to_vec()));
+        Ok(())
+    })
+    .expect("example runs");
+    (summary, rows)
+}
+
+/// The value of history column `name` in `row`.
+pub fn column(row: &[(String, f64)], name: &str) -> f64 {
+    row.iter()
+        .find(|(n, _)| n == name)
+        .map(|(_, v)| *v)
+        .unwrap_or_else(|| panic!("no history column {name}"))
 }
 
 /// A history column of the last increment of a record.
