@@ -135,9 +135,12 @@ pub fn example(dir: &str, model: &str, mesh: Option<&str>) -> (Model, Analysis) 
     (m, an)
 }
 
+/// One converged increment: its time and the contact history columns.
+pub type HistoryRow = (f64, Vec<(String, f64)>);
+
 /// Runs an example analysis with its contact pairs; returns the summary and, per converged
 /// increment, its time and the contact history columns.
-pub fn contact_history(an: &Analysis) -> (RunSummary, Vec<(f64, Vec<(String, f64)>)>) {
+pub fn contact_history(an: &Analysis) -> (RunSummary, Vec<HistoryRow>) {
     let mut terms = tricontact_fem::contact::ContactTerms::new(an);
     let mut rows = Vec::new();
     let summary = run(an, &mut terms, &mut |info| {
