@@ -7,8 +7,9 @@
 //! [`Group`]. Unnamed groups are named by their tag number.
 //!
 //! Node tags: when the file's node tags are dense, `mshio` does not return
-//! them; they are then `min_node_tag, min_node_tag + 1, …` in file order
-//! (which is how Gmsh writes dense tags).
+//! them; they are read from the file by [`crate::gmsh_nodes`], so a mesh whose
+//! tags are not in file order is read right. A tag defined twice and a
+//! non-finite coordinate are errors naming the node.
 
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
@@ -139,18 +140,27 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<Mesh> {
     let mut mesh = Mesh::default();
     let mut tag_to_index: HashMap<u64, usize> = HashMap::new();
     if let Some(nodes) = &msh.data.nodes {
+        let total: usize = nodes.node_blocks.iter().map(|b| b.nodes.len()).sum();
+        let mut file_tags = crate::gmsh_nodes::node_tags(bytes)
+            .filter(|t| t.len() == total)
+            .map(Vec::into_iter);
         let mut next_dense = nodes.min_node_tag;
         for block in &nodes.node_blocks {
             let mut block_tags = vec![0u64; block.nodes.len()];
-            match &block.node_tags {
-                Some(map) => {
+            match (&mut file_tags, &block.node_tags) {
+                (Some(tags), _) => {
+                    for (slot, tag) in block_tags.iter_mut().zip(tags) {
+                        *slot = tag;
+                    }
+                }
+                (None, Some(map)) => {
                     for (&tag, &i) in map {
                         if let Some(slot) = block_tags.get_mut(i) {
                             *slot = tag;
                         }
                     }
                 }
-                None => {
+                (None, None) => {
                     for t in &mut block_tags {
                         *t = next_dense;
                         next_dense += 1;
@@ -158,8 +168,17 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<Mesh> {
                 }
             }
             for (node, tag) in block.nodes.iter().zip(block_tags) {
-                tag_to_index.insert(tag, mesh.nodes.len());
-                mesh.nodes.push([node.x, node.y, node.z]);
+                let x = [node.x, node.y, node.z];
+                if !x.iter().all(|c| c.is_finite()) {
+                    return Err(merr(format!(
+                        "node {tag} has a non-finite coordinate ({}, {}, {})",
+                        x[0], x[1], x[2]
+                    )));
+                }
+                if tag_to_index.insert(tag, mesh.nodes.len()).is_some() {
+                    return Err(merr(format!("node tag {tag} is defined twice")));
+                }
+                mesh.nodes.push(x);
                 mesh.node_tags.push(tag);
             }
         }

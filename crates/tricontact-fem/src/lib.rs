@@ -20,6 +20,7 @@ pub mod error;
 pub mod face;
 pub mod follower;
 pub mod gmsh;
+pub mod gmsh_nodes;
 pub mod hertz;
 pub mod hex8;
 pub mod inp;
