@@ -8,7 +8,7 @@
 //! integration points (`h` its largest corner distance) and *inverted* when
 //! some `det J < 0`.
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::path::PathBuf;
 
 use crate::contact::ContactPair;
@@ -104,6 +104,16 @@ pub struct Analysis {
     pub output_dir: PathBuf,
 }
 
+/// Most increments (and Newton iterations) a step may ask for.
+pub const MAX_INCREMENTS: usize = 1_000_000;
+
+/// Most halvings of an increment: 30 already make it 10⁻⁹ of the step.
+pub const MAX_CUTBACKS: usize = 30;
+
+/// Largest Young's modulus accepted: far beyond any unit system, and small enough that the
+/// default penalty `10 E h` and the stiffness matrix stay finite.
+pub const MAX_MODULUS: f64 = 1e100;
+
 impl Analysis {
     /// Resolves and validates; fails with the single problem found or with
     /// [`FemError::Invalid`] listing all of them.
@@ -116,7 +126,13 @@ impl Analysis {
             0 => Ok(an),
             1 => Err(problems.remove(0)),
             _ => Err(FemError::Invalid(
-                problems.iter().map(ToString::to_string).collect(),
+                problems
+                    .into_iter()
+                    .flat_map(|p| match p {
+                        FemError::Invalid(list) => list,
+                        other => vec![other.to_string()],
+                    })
+                    .collect(),
             )),
         }
     }
@@ -179,19 +195,35 @@ impl Analysis {
                 extrapolation: s.extrapolation,
             })
             .collect();
-        for s in &steps {
-            if s.increments == 0 || s.max_iterations == 0 {
+        for (i, s) in steps.iter().enumerate() {
+            if steps[..i].iter().any(|t| t.name == s.name) {
                 problems.push(invalid(format!(
-                    "step '{}': increments and max_iterations must be ≥ 1",
+                    "step name '{}' is used twice (`steps = [...]` must name one step)",
                     s.name
                 )));
             }
-            let valid = s.residual_tolerance > 0.0 && s.displacement_tolerance > 0.0;
-            if !valid {
-                problems.push(invalid(format!(
-                    "step '{}': tolerances must be > 0",
-                    s.name
-                )));
+            for (key, value, low, high) in [
+                ("increments", s.increments, 1, MAX_INCREMENTS),
+                ("max_iterations", s.max_iterations, 1, MAX_INCREMENTS),
+                ("max_cutbacks", s.max_cutbacks, 0, MAX_CUTBACKS),
+            ] {
+                if !(low..=high).contains(&value) {
+                    problems.push(invalid(format!(
+                        "step '{}': {key} must be from {low} to {high} (got {value})",
+                        s.name
+                    )));
+                }
+            }
+            for (key, value) in [
+                ("residual_tolerance", s.residual_tolerance),
+                ("displacement_tolerance", s.displacement_tolerance),
+            ] {
+                if !(value > 0.0 && value < 1.0) {
+                    problems.push(invalid(format!(
+                        "step '{}': {key} must be > 0 and < 1 (got {value})",
+                        s.name
+                    )));
+                }
             }
         }
         let step_mask = |steps_opt: &Option<Vec<String>>,
@@ -222,10 +254,10 @@ impl Analysis {
         let mut materials = Vec::new();
         let mut mat_index = HashMap::new();
         for m in &model.materials {
-            let valid = m.e > 0.0 && m.nu > -1.0 && m.nu < 0.5;
+            let valid = m.e > 0.0 && m.e < MAX_MODULUS && m.nu > -1.0 && m.nu < 0.5;
             if !valid {
                 problems.push(invalid(format!(
-                    "material '{}': need E > 0 and -1 < nu < 0.5 (got E = {}, nu = {})",
+                    "material '{}': need 0 < E < 1e100 and -1 < nu < 0.5 (got E = {}, nu = {})",
                     m.name, m.e, m.nu
                 )));
             }
@@ -245,7 +277,14 @@ impl Analysis {
         if model.bodies.is_empty() {
             problems.push(invalid("no [[body]] defined".into()));
         }
-        for b in &model.bodies {
+        // Elements claimed by two bodies: (first body, second body) -> (count, first tag).
+        let mut shared: BTreeMap<(usize, usize), (usize, u64)> = BTreeMap::new();
+        let mut owner_def: Vec<usize> = vec![usize::MAX; mesh.elements.len()];
+        for (bi, b) in model.bodies.iter().enumerate() {
+            if model.bodies[..bi].iter().any(|c| c.group == b.group) {
+                problems.push(invalid(format!("body group '{}' is listed twice", b.group)));
+                continue;
+            }
             let Some(&mi) = mat_index.get(&b.material) else {
                 problems.push(invalid(format!(
                     "body '{}': unknown material '{}' (materials: {})",
@@ -264,13 +303,14 @@ impl Analysis {
                 Some(g) if g.dim == 3 => {
                     for &e in &g.elements {
                         if owner[e].is_some() {
-                            problems.push(invalid(format!(
-                                "element {} is in two bodies",
-                                mesh.elements[e].tag
-                            )));
+                            let entry = shared
+                                .entry((owner_def[e], bi))
+                                .or_insert((0, mesh.elements[e].tag));
+                            entry.0 += 1;
                             continue;
                         }
                         owner[e] = Some(body.len());
+                        owner_def[e] = bi;
                         body.push(BodyElement {
                             element: e,
                             material: mi,
@@ -283,6 +323,12 @@ impl Analysis {
                 ))),
                 None => problems.push(unknown("volume", &b.group, &mesh)),
             }
+        }
+        for ((a, b), (count, tag)) in shared {
+            problems.push(invalid(format!(
+                "bodies '{}' and '{}' share {count} element(s) (the first: Gmsh tag {tag}); an element belongs to one body",
+                model.bodies[a].group, model.bodies[b].group
+            )));
         }
         let mut active_nodes = vec![false; mesh.nodes.len()];
         for be in &body {
@@ -366,7 +412,23 @@ impl Analysis {
                 elements: body.iter().map(|b| &mesh.elements[b.element]).collect(),
                 youngs,
             };
-            for c in &model.contacts {
+            for (i, c) in model.contacts.iter().enumerate() {
+                let name = format!("{}-{}", c.slave, c.master);
+                if c.slave == c.master {
+                    problems.push(invalid(format!(
+                        "contact '{name}': slave and master are the same group (self-contact is not supported)"
+                    )));
+                    continue;
+                }
+                if model.contacts[..i]
+                    .iter()
+                    .any(|d| d.slave == c.slave && d.master == c.master)
+                {
+                    problems.push(invalid(format!(
+                        "contact '{name}' is defined twice (its force would be applied twice)"
+                    )));
+                    continue;
+                }
                 match crate::contact::pair::resolve(c, &mut moved, &bodies, &in_body, &mut rigid) {
                     Ok(p) => contacts.push(p),
                     Err(list) => problems.extend(list.into_iter().map(&invalid)),
@@ -495,6 +557,15 @@ impl Analysis {
                 problems.push(unknown(kind, &l.group, &mesh));
                 continue;
             };
+            let finite = l.force.is_none_or(|f| f.iter().all(|c| c.is_finite()))
+                && l.pressure.is_none_or(f64::is_finite);
+            if !finite {
+                problems.push(invalid(format!(
+                    "load '{}': non-finite force or pressure",
+                    l.group
+                )));
+                continue;
+            }
             let mut follower = None;
             if l.follower && l.pressure.is_none() {
                 problems.push(invalid(format!(

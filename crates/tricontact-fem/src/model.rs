@@ -149,6 +149,7 @@ pub struct LoadDef {
     /// Group: a node group for `force`, a 2D group for `pressure`.
     pub group: String,
     /// Total force vector applied to the group.
+    #[serde(default, deserialize_with = "three_opt")]
     pub force: Option<[f64; 3]>,
     /// Pressure (positive pushes into the body), dead load on the reference surface.
     pub pressure: Option<f64>,
@@ -311,16 +312,31 @@ pub struct HertzDef {
     /// Contact modulus `E*` (default: `E/(1 − ν²)` of the slave body, master rigid).
     pub modulus: Option<f64>,
     /// Point of first contact; radii are measured from the axis through it.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "three")]
     pub centre: [f64; 3],
     /// Load axis, pointing from the flat into the sphere.
-    #[serde(default = "default_axis")]
+    #[serde(default = "default_axis", deserialize_with = "three")]
     pub axis: [f64; 3],
     /// The model is `1/symmetry` of the full contact (quarter model: 4).
     #[serde(default = "one")]
     pub symmetry: usize,
     /// Group whose mean displacement against `axis` is reported as the approach.
     pub loaded: String,
+}
+
+/// Exactly three numbers: serde's fixed-size arrays read the first three entries of a longer
+/// TOML array and ignore the rest.
+fn three<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<[f64; 3], D::Error> {
+    let v: Vec<f64> = Vec::deserialize(d)?;
+    <[f64; 3]>::try_from(v.as_slice())
+        .map_err(|_| serde::de::Error::invalid_length(v.len(), &"an array of 3 numbers"))
+}
+
+/// [`three`] for an optional key.
+fn three_opt<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> std::result::Result<Option<[f64; 3]>, D::Error> {
+    three(d).map(Some)
 }
 
 fn default_axis() -> [f64; 3] {
@@ -506,6 +522,23 @@ nlgeom = true
         let msg = e.to_string();
         assert!(msg.contains("incremnets"), "{msg}");
         assert!(msg.contains("line 22, column 1"), "{msg}");
+    }
+
+    #[test]
+    fn a_vector_has_exactly_three_entries() {
+        for bad in ["[0.0, 1.0]", "[0.0, 1.0, 2.0, 3.0]"] {
+            let text = format!("{GOOD}[[load]]\ngroup = \"tip\"\nforce = {bad}\n");
+            let msg = Model::parse(&text, Path::new("m.toml"))
+                .expect_err("not three")
+                .to_string();
+            assert!(
+                msg.contains("an array of 3 numbers") && msg.contains("line 26, column 9"),
+                "{msg}"
+            );
+        }
+        let text = format!("{GOOD}[[load]]\ngroup = \"tip\"\nforce = [0.0, 1.0, 2.0]\n");
+        let m = Model::parse(&text, Path::new("m.toml")).expect("three");
+        assert_eq!(m.loads[1].force, Some([0.0, 1.0, 2.0]));
     }
 
     #[test]

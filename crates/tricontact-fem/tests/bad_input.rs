@@ -194,3 +194,49 @@ fn old_msh_format_and_garbage_are_rejected_clearly() {
     assert!(matches!(e, FemError::Mesh { .. }), "{e}");
     assert!(!e.to_string().contains('\n'), "one line: {e}");
 }
+
+#[test]
+fn values_that_would_give_nan_or_never_end_are_rejected_by_key() {
+    // model_text ends with a bare `[[step]]`: its keys follow.
+    let extra = "[[body]]\ngroup = \"solid\"\nmaterial = \"m\"\n\
+                 [[load]]\ngroup = \"base\"\npressure = nan\n\
+                 [[load]]\ngroup = \"solid\"\nforce = [0.0, inf, 0.0]\n\
+                 [[contact]]\nslave = \"base\"\nmaster = \"base\"\nmethod = \"penalty\"\n\
+                 [[contact]]\nslave = \"solid\"\nmaster = \"base\"\nmethod = \"penalty\"\n\
+                 [[contact]]\nslave = \"solid\"\nmaster = \"base\"\nmethod = \"penalty\"\n";
+    let steps = "name = \"a\"\nmax_cutbacks = 1000\nresidual_tolerance = 0.0\n\
+                 [[step]]\nname = \"a\"\nincrements = 0\n";
+    let text = model_text("solid", extra).replace("E = 1.0", "E = inf") + steps;
+    let p = setup("nan", &msh(4, &TET), &text);
+    let msg = load_analysis(&p).expect_err("invalid").to_string();
+    for expected in [
+        "material 'm': need 0 < E < 1e100",
+        "body group 'solid' is listed twice",
+        "load 'base': non-finite force or pressure",
+        "load 'solid': non-finite force or pressure",
+        "contact 'base-base': slave and master are the same group",
+        "contact 'solid-base' is defined twice",
+        "step name 'a' is used twice",
+        "step 'a': max_cutbacks must be from 0 to 30 (got 1000)",
+        "step 'a': residual_tolerance must be > 0 and < 1 (got 0)",
+        "step 'a': increments must be from 1 to 1000000 (got 0)",
+    ] {
+        assert!(msg.contains(expected), "missing «{expected}» in {msg}");
+    }
+    assert_eq!(msg.matches("invalid model").count(), 1, "{msg}");
+}
+
+#[test]
+fn overlapping_bodies_are_reported_once_per_pair() {
+    let extra = "[[body]]\ngroup = \"other\"\nmaterial = \"m\"\n[[boundary]]\ngroup = \"solid\"\nfix = [\"x\", \"y\", \"z\"]\n";
+    // The volume entity in two physical groups: the same element under another name.
+    let mesh = msh(4, &TET)
+        .replace("$PhysicalNames\n2\n", "$PhysicalNames\n3\n3 3 \"other\"\n")
+        .replace("1 0 0 0 1 1 1 1 1 0", "1 0 0 0 1 1 1 2 1 3 0");
+    let p = setup("overlap", &mesh, &model_text("solid", extra));
+    let msg = load_analysis(&p).expect_err("overlap").to_string();
+    assert!(
+        msg.contains("bodies 'solid' and 'other' share 1 element(s) (the first: Gmsh tag 1)"),
+        "{msg}"
+    );
+}
