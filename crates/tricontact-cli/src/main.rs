@@ -145,6 +145,14 @@ fn set_threads(threads: Option<usize>) -> Result<(), String> {
     if n == 0 {
         return Err("--threads must be at least 1".into());
     }
+    // More threads than cores only adds contention (1000 threads made a 0.06 s run take minutes).
+    let cores = std::thread::available_parallelism().map_or(1, std::num::NonZero::get);
+    let n = if n > cores {
+        eprintln!("note: --threads {n}: this machine has {cores} cores; using {cores}");
+        cores
+    } else {
+        n
+    };
     rayon::ThreadPoolBuilder::new()
         .num_threads(n)
         .build_global()
@@ -282,12 +290,32 @@ fn export(
     );
     let deck = inp::write(&an, &title).map_err(|e| format!("{}: {e}", model_path.display()))?;
     let path = output.unwrap_or_else(|| model_path.with_extension("inp"));
+    check_deck_path(&path)?;
     atomic::write_atomic(&path, deck.text.as_bytes()).map_err(|e| e.to_string())?;
     for note in &deck.notes {
         say!("note: {note}");
     }
     say!("wrote {}", path.display());
     Ok(())
+}
+
+/// A deck path must end in `.inp` (as `ccx` expects; it also keeps `-o` from replacing the model
+/// or its mesh) and, if it exists, be a regular file (the deck is written by renaming a temporary
+/// file over it, which would replace a symbolic link or a device rather than write to it).
+fn check_deck_path(path: &Path) -> Result<(), String> {
+    if path.extension().and_then(|e| e.to_str()) != Some("inp") {
+        return Err(format!(
+            "{}: the deck's name must end in .inp (ccx reads JOB.inp)",
+            path.display()
+        ));
+    }
+    match std::fs::symlink_metadata(path) {
+        Ok(m) if !m.file_type().is_file() => Err(format!(
+            "{}: exists and is not a regular file; not replaced",
+            path.display()
+        )),
+        _ => Ok(()),
+    }
 }
 
 fn check(model_path: &Path, mesh_override: Option<PathBuf>) -> Result<(), FemError> {

@@ -320,7 +320,7 @@ fn hertz_table_errors_name_the_key() {
         ),
         (
             "[[step]]",
-            "[[contact]]\nslave = \"contact\"\nmaster = \"flat\"\nmethod = \"penalty\"\n\n[[step]]",
+            "[[contact]]\nslave = \"top\"\nmaster = \"flat\"\nmethod = \"penalty\"\n\n[[step]]",
             "[hertz] contact: name the pair, the model has 2",
         ),
     ] {
@@ -472,4 +472,74 @@ fn export_writes_a_calculix_deck_and_names_what_it_cannot() {
     );
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
     assert!(!out.exists());
+}
+
+/// `export -o` writes only a regular `.inp` file: never the model, its mesh, a symbolic link or a
+/// device; the file it would have replaced is untouched.
+#[test]
+fn export_refuses_to_replace_what_is_not_a_deck() {
+    let dir = temp_dir("export-target");
+    let model = dir.join("model.toml");
+    let src = std::fs::read_to_string(examples_dir().join("patch/penalty.toml")).expect("model");
+    let mesh = examples_dir().join("patch/matching-hex.msh");
+    let src = src.replace("\"matching-hex.msh\"", &format!("{mesh:?}"));
+    std::fs::write(&model, &src).expect("write model");
+    let target = dir.join("target.inp");
+    std::fs::write(&target, "kept").expect("target");
+    let link = dir.join("link.inp");
+    std::os::unix::fs::symlink(&target, &link).expect("symlink");
+    for (out, expected) in [
+        (model.clone(), "must end in .inp"),
+        (mesh.clone(), "must end in .inp"),
+        (link.clone(), "not a regular file"),
+    ] {
+        let o = bin()
+            .args([
+                "export".as_ref(),
+                model.as_os_str(),
+                "-o".as_ref(),
+                out.as_os_str(),
+            ])
+            .output()
+            .expect("runs");
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && stderr.contains(expected),
+            "{}: {stderr}",
+            out.display()
+        );
+    }
+    assert_eq!(std::fs::read_to_string(&model).expect("model"), src);
+    assert!(
+        std::fs::symlink_metadata(&link)
+            .expect("link")
+            .file_type()
+            .is_symlink()
+    );
+    assert_eq!(std::fs::read_to_string(&target).expect("target"), "kept");
+}
+
+/// More threads than cores are capped, with a note, instead of slowing the run to a crawl.
+#[test]
+fn threads_beyond_the_cores_are_capped() {
+    let dir = temp_dir("threads");
+    let o = bin()
+        .args([
+            "run".as_ref(),
+            examples_dir().join("patch/penalty.toml").as_os_str(),
+            "--mesh".as_ref(),
+            examples_dir().join("patch/matching-hex.msh").as_os_str(),
+            "--output".as_ref(),
+            dir.as_os_str(),
+            "--threads".as_ref(),
+            "100000".as_ref(),
+        ])
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("note: --threads 100000: this machine has"),
+        "{stderr}"
+    );
 }
