@@ -583,3 +583,29 @@ fn multiplier_status_cycling_is_frozen_and_reported() {
             .contains("frozen")
     );
 }
+
+/// A rigid master keeps the mesh's node order; if its normals point into the slave (every face of
+/// Hertz's flat reversed) the model is rejected instead of running with the sphere seen as deep
+/// inside the flat (a force 100× too large, exit code 0).
+#[test]
+fn a_rigid_master_facing_away_from_the_slave_is_rejected() {
+    let folder = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/hertz");
+    let model = Model::load_with_mesh(
+        &folder.join("penalty.toml"),
+        Some(&folder.join("hertz-coarse.msh")),
+    )
+    .expect("model");
+    let mesh = tricontact_fem::gmsh::read_msh(&model.mesh_path()).expect("mesh");
+    Analysis::new(&model, mesh.clone()).expect("as meshed, the flat faces the sphere");
+    let mut flipped = mesh;
+    let flat = flipped.group("flat").expect("flat").elements.clone();
+    for e in flat {
+        flipped.elements[e].nodes.swap(1, 2);
+    }
+    let e = Analysis::new(&model, flipped).expect_err("reversed flat");
+    let msg = e.to_string();
+    assert!(
+        msg.contains("the normals of the rigid master 'flat' point into the slave surface"),
+        "{msg}"
+    );
+}

@@ -191,6 +191,22 @@ fn edge_lengths(mesh: &Mesh, facets: &[[u32; 3]]) -> (f64, f64) {
 }
 
 /// The mesh's node coordinates as kernel vectors.
+/// Area-weighted outward normal at each node of `facets` (oriented out of their body).
+fn outward_normals(mesh: &Mesh, facets: &[[u32; 3]]) -> HashMap<usize, Vec3> {
+    let x = |a: u32| {
+        let p = mesh.nodes[a as usize];
+        Vec3::new(p[0], p[1], p[2])
+    };
+    let mut normals: HashMap<usize, Vec3> = HashMap::new();
+    for &[i, j, k] in facets {
+        let w = (x(j) - x(i)).cross(&(x(k) - x(i)));
+        for a in [i, j, k] {
+            *normals.entry(a as usize).or_insert_with(Vec3::zeros) += w;
+        }
+    }
+    normals
+}
+
 pub(crate) fn positions(mesh: &Mesh) -> Vec<Vec3> {
     mesh.nodes
         .iter()
@@ -366,11 +382,27 @@ pub fn resolve(
         let adjust = def.adjust.unwrap_or(0.0);
         let (mut moved, mut deep, mut largest, mut worst) = (0usize, 0usize, 0.0f64, 0usize);
         let mut moves = Vec::new();
+        // A rigid master keeps the mesh's node order: count the slave nodes whose facet's normal
+        // points the way the slave surface's outward normal does (into the slave body).
+        let rigid_master = surface
+            .facets()
+            .iter()
+            .flatten()
+            .all(|&a| !in_body[a as usize]);
+        let slave_normals = outward_normals(mesh, &s_facets);
+        let (mut facing, mut away) = (0usize, 0usize);
         for &a in &slaves {
             let Ok(idx) = u32::try_from(a) else { continue };
             let Some((_, pair)) = choose_facet(&surface, &bvh, &x, idx, h_max) else {
                 continue;
             };
+            // Only where the two surfaces are roughly parallel (|cos| > 1/2): a slave face at
+            // right angles to the master (a symmetry plane) says nothing.
+            if let Some(n) = slave_normals.get(&a).and_then(|n| n.try_normalize(0.0)) {
+                let cos = pair.facet.normal().dot(&n);
+                facing += usize::from(cos < -0.5);
+                away += usize::from(cos > 0.5);
+            }
             let p = pair.gap();
             if p >= 0.0 {
                 continue;
@@ -385,6 +417,13 @@ pub fn resolve(
                     worst = a;
                 }
             }
+        }
+        if rigid_master && away > facing {
+            return Err(vec![format!(
+                "contact '{name}': the normals of the rigid master '{}' point into the slave surface at {away} of the {} slave nodes facing it; a face of no body element keeps the mesh's node order, and its normal (x_j − x_i) × (x_k − x_i) must point towards the slave: reverse the order of its nodes",
+                def.master,
+                away + facing
+            )]);
         }
         for (a, d) in moves {
             for i in 0..3 {
