@@ -113,8 +113,16 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<Mesh> {
         // the context chain on one line.
         let text = e.to_string();
         let text = text.split("Hex dump").next().unwrap_or_default();
+        // A cut-off file is the usual cause: say which section never ends.
+        let unfinished = ["$Entities", "$Nodes", "$Elements"].into_iter().find(|s| {
+            find(bytes, s.as_bytes()).is_some()
+                && find(bytes, format!("$End{}", &s[1..]).as_bytes()).is_none()
+        });
+        let hint = unfinished
+            .map(|s| format!(" (the file ends inside {s}: is it complete?)"))
+            .unwrap_or_default();
         merr(format!(
-            "parse error: {}",
+            "parse error: {}{hint}",
             text.split_whitespace().collect::<Vec<_>>().join(" ")
         ))
     })?;

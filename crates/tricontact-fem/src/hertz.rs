@@ -157,6 +157,11 @@ impl HertzSetup {
                     ))
                 })?,
             None if an.contacts.len() == 1 => &an.contacts[0],
+            None if an.contacts.is_empty() => {
+                return Err(invalid(
+                    "needs a [[contact]] pair (the sphere as slave, the flat as master)".into(),
+                ));
+            }
             None => {
                 return Err(invalid(format!(
                     "contact: name the pair, the model has {} (pairs: {})",

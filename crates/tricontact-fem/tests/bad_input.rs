@@ -193,6 +193,7 @@ fn old_msh_format_and_garbage_are_rejected_clearly() {
     let e = gmsh::parse_msh(truncated.as_bytes(), Path::new("t.msh")).expect_err("truncated");
     assert!(matches!(e, FemError::Mesh { .. }), "{e}");
     assert!(!e.to_string().contains('\n'), "one line: {e}");
+    assert!(e.to_string().contains("is it complete?"), "{e}");
 }
 
 #[test]
