@@ -271,7 +271,9 @@ impl Analysis {
             materials.push(Material::from_e_nu(law, m.e, m.nu));
         }
 
-        // Bodies.
+        // Bodies. When one cannot be resolved, the checks that depend on which nodes belong to a
+        // body (supports, loads, contact) are skipped: they would only repeat the problem.
+        let before_bodies = problems.len();
         let mut body = Vec::new();
         let mut owner: Vec<Option<usize>> = vec![None; mesh.elements.len()];
         if model.bodies.is_empty() {
@@ -330,6 +332,7 @@ impl Analysis {
                 model.bodies[a].group, model.bodies[b].group
             )));
         }
+        let bodies_ok = problems.len() == before_bodies;
         let mut active_nodes = vec![false; mesh.nodes.len()];
         for be in &body {
             for &a in &mesh.elements[be.element].nodes {
@@ -429,6 +432,9 @@ impl Analysis {
                     )));
                     continue;
                 }
+                if !bodies_ok {
+                    continue;
+                }
                 match crate::contact::pair::resolve(c, &mut moved, &bodies, &in_body, &mut rigid) {
                     Ok(p) => contacts.push(p),
                     Err(list) => problems.extend(list.into_iter().map(&invalid)),
@@ -487,7 +493,7 @@ impl Analysis {
                 .copied()
                 .filter(|&a| active_nodes[a])
                 .collect();
-            if nodes.is_empty() {
+            if nodes.is_empty() && bodies_ok {
                 problems.push(invalid(format!(
                     "boundary '{}': the group has no node of any body",
                     b.group
@@ -586,7 +592,7 @@ impl Analysis {
                         .copied()
                         .filter(|&a| active_nodes[a])
                         .collect();
-                    if faces.is_empty() && nodes.is_empty() {
+                    if faces.is_empty() && nodes.is_empty() && bodies_ok {
                         problems.push(invalid(format!(
                             "load '{}': the group has no node of any body",
                             l.group
@@ -611,10 +617,12 @@ impl Analysis {
                             f
                         }
                         Err(tag) => {
-                            problems.push(invalid(format!(
-                                "load '{}': face {tag} is not on the surface of a body",
-                                l.group
-                            )));
+                            if bodies_ok {
+                                problems.push(invalid(format!(
+                                    "load '{}': face {tag} is not on the surface of a body",
+                                    l.group
+                                )));
+                            }
                             continue;
                         }
                     }
@@ -627,7 +635,7 @@ impl Analysis {
                     continue;
                 }
             };
-            if forces.keys().any(|&a| !active_nodes[a]) {
+            if forces.keys().any(|&a| !active_nodes[a]) && bodies_ok {
                 problems.push(invalid(format!(
                     "load '{}': applied to nodes of no body",
                     l.group

@@ -241,3 +241,19 @@ fn overlapping_bodies_are_reported_once_per_pair() {
         "{msg}"
     );
 }
+
+#[test]
+fn an_unresolved_body_is_reported_without_knock_on_errors() {
+    let extra = "[[boundary]]\ngroup = \"solid\"\nfix = [\"x\"]\n[[load]]\ngroup = \"base\"\npressure = 1.0\n";
+    let text = model_text("solid", extra).replace("material = \"m\"", "material = \"steel\"");
+    let p = setup("knock-on", &msh(4, &TET), &text);
+    let msg = load_analysis(&p).expect_err("unknown material").to_string();
+    assert!(
+        msg.contains("body 'solid': unknown material 'steel' (materials: m)"),
+        "{msg}"
+    );
+    assert!(
+        !msg.contains("no node of any body") && !msg.contains(';'),
+        "one problem: {msg}"
+    );
+}
