@@ -12,8 +12,11 @@
 //!   columns of the extra terms (contact: see [`crate::contact`]);
 //! * extra point fields of the extra terms (contact) in every `.vtu`.
 //!
-//! `.vtu` files of an earlier run of the same model in the folder are
-//! removed first, so the folder always matches the `.pvd`.
+//! Files of an earlier run that this run would write under the same names
+//! (`<stem>.pvd`, `<stem>_<step>_<increment>.vtu`, `history.csv` and the
+//! tables and charts of [`crate::report`]) are removed first, so that even
+//! after a failed run the folder holds only what this run wrote; other files
+//! are left alone.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -22,25 +25,46 @@ use crate::analysis::Analysis;
 use crate::atomic::write_atomic;
 use crate::driver::IncrementInfo;
 use crate::error::{FemError, Result};
+use crate::report::FILE_NAMES;
 use crate::results::{boundary_reactions, stress_fields};
 use crate::vtu::{Field, Grid, pvd_string, vtk_cell, vtu_string};
 
-/// Removes `.vtu` files of an earlier run of the same model
-/// (`<stem>_<3 digits>_<4 digits>.vtu`), so the folder matches the new `.pvd`.
+/// `history.csv`: one row per converged increment.
+const HISTORY_CSV: &str = "history.csv";
+
+/// Whether `name` is `<stem>_<3 digits>_<4 digits>.vtu`, a `.vtu` of the model `stem`.
+fn is_model_vtu(name: &str, stem: &str) -> bool {
+    let Some(core) = name
+        .strip_prefix(stem)
+        .and_then(|r| r.strip_prefix('_'))
+        .and_then(|r| r.strip_suffix(".vtu"))
+    else {
+        return false;
+    };
+    let numeric = |s: &str, n: usize| s.len() == n && s.bytes().all(|b| b.is_ascii_digit());
+    matches!(core.split_once('_'), Some((s, i)) if numeric(s, 3) && numeric(i, 4))
+}
+
+/// Removes `path`; one that is not there is fine.
+fn remove_if_present(path: &Path) -> Result<()> {
+    match std::fs::remove_file(path) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(FemError::io(path, e)),
+        _ => Ok(()),
+    }
+}
+
+/// Removes the files of an earlier run that this run would write under the same names: the
+/// `.pvd` first (so it never lists missing files), `history.csv`, the tables and charts of
+/// [`crate::report`], then the model's `.vtu` files.
 fn remove_stale(dir: &Path, stem: &str) -> Result<()> {
+    remove_if_present(&dir.join(format!("{stem}.pvd")))?;
+    for name in std::iter::once(HISTORY_CSV).chain(FILE_NAMES) {
+        remove_if_present(&dir.join(name))?;
+    }
     let entries = std::fs::read_dir(dir).map_err(|e| FemError::io(dir, e))?;
     for entry in entries.flatten() {
-        let name = entry.file_name().to_string_lossy().into_owned();
-        let Some(rest) = name.strip_prefix(stem).and_then(|r| r.strip_prefix('_')) else {
-            continue;
-        };
-        let Some(core) = rest.strip_suffix(".vtu") else {
-            continue;
-        };
-        let parts: Vec<&str> = core.split('_').collect();
-        let numeric = |s: &str, n: usize| s.len() == n && s.bytes().all(|b| b.is_ascii_digit());
-        if parts.len() == 2 && numeric(parts[0], 3) && numeric(parts[1], 4) {
-            std::fs::remove_file(entry.path()).map_err(|e| FemError::io(entry.path(), e))?;
+        if is_model_vtu(&entry.file_name().to_string_lossy(), stem) {
+            remove_if_present(&entry.path())?;
         }
     }
     Ok(())
@@ -140,7 +164,7 @@ impl ResultWriter {
         }
         self.history.push('\n');
         if an.output.history {
-            let p = self.dir.join("history.csv");
+            let p = self.dir.join(HISTORY_CSV);
             write_atomic(&p, self.history.as_bytes())?;
             if !self.written.contains(&p) {
                 self.written.push(p);

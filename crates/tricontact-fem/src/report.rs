@@ -25,6 +25,32 @@ use crate::error::{FemError, Result};
 use crate::hertz::{HertzSample, HertzSetup, fit_approach};
 use crate::plots::{Axes, Series, chart};
 
+/// `newton.csv`: the residual of every Newton iteration.
+const NEWTON_CSV: &str = "newton.csv";
+/// `hertz.csv`: the Hertz comparison per increment.
+const HERTZ_CSV: &str = "hertz.csv";
+/// `hertz_profile.csv`: the pressure profile of the last increment.
+const HERTZ_PROFILE_CSV: &str = "hertz_profile.csv";
+/// `newton.png`: the residual chart.
+const NEWTON_PNG: &str = "newton.png";
+/// `contact_force.png`: the contact force chart.
+const CONTACT_FORCE_PNG: &str = "contact_force.png";
+/// `hertz_pressure.png`: the pressure profile against Hertz.
+const HERTZ_PRESSURE_PNG: &str = "hertz_pressure.png";
+/// `hertz_force_approach.png`: force against approach.
+const HERTZ_FORCE_APPROACH_PNG: &str = "hertz_force_approach.png";
+/// Every file this module may write into a result folder (whichever a run writes depends on the
+/// model), so that a new run can remove those of an earlier one.
+pub const FILE_NAMES: [&str; 7] = [
+    NEWTON_CSV,
+    HERTZ_CSV,
+    HERTZ_PROFILE_CSV,
+    NEWTON_PNG,
+    CONTACT_FORCE_PNG,
+    HERTZ_PRESSURE_PNG,
+    HERTZ_FORCE_APPROACH_PNG,
+];
+
 /// Residual history of one increment.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NewtonLog {
@@ -90,10 +116,10 @@ impl RunRecord {
                 let _ = writeln!(csv, "{},{},{k},{r:e}", log.step + 1, log.increment);
             }
         }
-        let mut written = vec![dir.join("newton.csv")];
+        let mut written = vec![dir.join(NEWTON_CSV)];
         write_atomic(&written[0], csv.as_bytes())?;
         if let Some((setup, samples)) = &self.hertz {
-            let path = dir.join("hertz.csv");
+            let path = dir.join(HERTZ_CSV);
             write_atomic(&path, hertz_table(setup, samples).as_bytes())?;
             written.push(path);
             if let Some(last) = samples.last() {
@@ -102,7 +128,7 @@ impl RunRecord {
                     let ph = setup.theory.pressure(last.force, r);
                     let _ = writeln!(csv, "{r:e},{p:e},{ph:e}");
                 }
-                let path = dir.join("hertz_profile.csv");
+                let path = dir.join(HERTZ_PROFILE_CSV);
                 write_atomic(&path, csv.as_bytes())?;
                 written.push(path);
             }
@@ -194,13 +220,13 @@ impl RunRecord {
     /// Drawing or file errors.
     pub fn write_plots(&self, dir: &Path) -> Result<Vec<PathBuf>> {
         let mut written = Vec::new();
-        let path = dir.join("newton.png");
+        let path = dir.join(NEWTON_PNG);
         let start = self.newton.len().saturating_sub(8);
         let series: Vec<Series> = self.newton[start..].iter().map(newton_series).collect();
         chart(&path, &newton_axes(), &series)?;
         written.push(path);
         if self.forces.iter().any(|(_, f)| !f.is_empty()) {
-            let path = dir.join("contact_force.png");
+            let path = dir.join(CONTACT_FORCE_PNG);
             chart(&path, &force_axes(), &self.force_series())?;
             written.push(path);
         }
@@ -338,7 +364,7 @@ fn hertz_plots(dir: &Path, setup: &HertzSetup, samples: &[HertzSample]) -> Resul
             curve(&|r| fp * (1.0 - (r / fa).powi(2)).max(0.0).sqrt()),
         ));
     }
-    let p_path = dir.join("hertz_pressure.png");
+    let p_path = dir.join(HERTZ_PRESSURE_PNG);
     let axes = Axes {
         title: "Contact pressure against Hertz",
         x: "distance from the axis r",
@@ -375,7 +401,7 @@ fn hertz_plots(dir: &Path, setup: &HertzSetup, samples: &[HertzSample]) -> Resul
             ),
         );
     }
-    let d_path = dir.join("hertz_force_approach.png");
+    let d_path = dir.join(HERTZ_FORCE_APPROACH_PNG);
     let axes = Axes {
         title: "Force against approach",
         x: "total force F",
@@ -392,7 +418,7 @@ fn hertz_plots(dir: &Path, setup: &HertzSetup, samples: &[HertzSample]) -> Resul
 /// # Errors
 /// Missing or malformed file (the message names file and line).
 pub fn read_newton(dir: &Path) -> Result<Vec<NewtonLog>> {
-    let path = dir.join("newton.csv");
+    let path = dir.join(NEWTON_CSV);
     let text = std::fs::read_to_string(&path).map_err(|e| FemError::io(&path, e))?;
     let mut logs: Vec<NewtonLog> = Vec::new();
     for (n, line) in text.lines().enumerate().skip(1) {

@@ -1,0 +1,142 @@
+//! The result folder as a whole: a run that fails after an earlier one leaves only the files it
+//! wrote itself (no stale `.pvd`, tables or plots of the earlier run), never touching files the
+//! program did not name.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use tricontact_fem::analysis::Analysis;
+use tricontact_fem::assembly::NoExtra;
+use tricontact_fem::driver::run;
+use tricontact_fem::mesh::ElementKind;
+use tricontact_fem::output::ResultWriter;
+use tricontact_fem::report::RunRecord;
+use tricontact_fem::structured::box_mesh;
+use tricontact_fem::{FemError, Result};
+
+const MODEL: &str = r#"
+[[material]]
+name = "m"
+type = "linear_elastic"
+E = 100.0
+nu = 0.25
+[[body]]
+group = "solid"
+material = "m"
+[[boundary]]
+group = "xmin"
+fix = ["x", "y", "z"]
+[[load]]
+group = "xmax"
+force = [1.0, 0.0, 0.0]
+[[step]]
+name = "pull"
+increments = 3
+[output]
+plots = true
+"#;
+
+fn analysis(model: &str) -> Analysis {
+    common::analysis(
+        box_mesh([2.0, 1.0, 1.0], [2, 1, 1], ElementKind::Tet4),
+        model,
+    )
+}
+
+fn fresh_dir(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("tricontact-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("dir");
+    dir
+}
+
+/// Runs like `tricontact run`: results and tables per increment, plots at the end; the run
+/// fails (as a diverging increment would) when increment `fail_at` converges.
+fn run_into(an: &Analysis, dir: &Path, fail_at: Option<usize>) -> Result<()> {
+    let mut writer = ResultWriter::new(an, dir, "m")?;
+    let mut record = RunRecord::new(None);
+    run(an, &mut NoExtra, &mut |info| {
+        if Some(info.increment) == fail_at {
+            return Err(FemError::Output("did not converge".into()));
+        }
+        writer.write(an, info)?;
+        record.record(an, info);
+        record.write_tables(dir).map(|_| ())
+    })?;
+    record.write_plots(dir).map(|_| ())
+}
+
+fn names(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .expect("dir")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+#[test]
+fn failed_run_leaves_only_its_own_files() {
+    let an = analysis(MODEL);
+    let dir = fresh_dir("stale");
+    run_into(&an, &dir, None).expect("first run");
+    assert!(names(&dir).contains(&"newton.png".to_string()));
+    // Files the program does not name, some looking much like its own: kept.
+    let others = [
+        "history.csv.bak",
+        "m.pvd.old",
+        "m_notes.txt",
+        "mm.pvd",
+        "my_history.csv",
+        "newton.png.txt",
+        "other.pvd",
+        "other_001_0001.vtu",
+    ];
+    for name in others {
+        std::fs::write(dir.join(name), "keep").expect("write");
+    }
+    // Left by a run with a Hertz comparison: also named by the program.
+    for name in ["hertz.csv", "hertz_profile.csv", "hertz_pressure.png"] {
+        std::fs::write(dir.join(name), "old").expect("write");
+    }
+    run_into(&an, &dir, Some(2)).expect_err("second run fails");
+    let mut expected: Vec<String> = ["history.csv", "m.pvd", "m_001_0001.vtu", "newton.csv"]
+        .iter()
+        .chain(&others)
+        .map(ToString::to_string)
+        .collect();
+    expected.sort();
+    assert_eq!(names(&dir), expected);
+    for name in others {
+        assert_eq!(
+            std::fs::read_to_string(dir.join(name)).expect("kept"),
+            "keep"
+        );
+    }
+    let pvd = std::fs::read_to_string(dir.join("m.pvd")).expect("pvd");
+    assert!(pvd.contains("m_001_0001.vtu") && !pvd.contains("m_001_0002.vtu"));
+    let history = std::fs::read_to_string(dir.join("history.csv")).expect("history");
+    assert_eq!(history.lines().count(), 2, "{history}");
+    let newton = std::fs::read_to_string(dir.join("newton.csv")).expect("newton");
+    assert!(
+        newton.lines().skip(1).all(|l| l.starts_with("1,1,")),
+        "{newton}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn run_without_history_or_vtu_removes_the_earlier_ones() {
+    let an = analysis(MODEL);
+    let dir = fresh_dir("stale-off");
+    run_into(&an, &dir, None).expect("first run");
+    let mut quiet = an.clone();
+    quiet.output.vtu = false;
+    quiet.output.history = false;
+    quiet.output.plots = false;
+    let mut writer = ResultWriter::new(&quiet, &dir, "m").expect("writer");
+    run(&quiet, &mut NoExtra, &mut |info| writer.write(&quiet, info)).expect("run");
+    assert!(names(&dir).is_empty(), "{:?}", names(&dir));
+    let _ = std::fs::remove_dir_all(&dir);
+}
