@@ -9,7 +9,9 @@
 //! * `history.csv`: one row per converged increment: step, name, increment,
 //!   load factor, time, iterations, final residual norm and relative
 //!   residual, then `Rx, Ry, Rz` summed over each boundary group, then the
-//!   columns of the extra terms (contact: see [`crate::contact`]);
+//!   columns of the extra terms (contact: see [`crate::contact`]); names
+//!   holding a comma, quote or line break are quoted
+//!   ([`crate::report::csv_field`], RFC 4180);
 //! * extra point fields of the extra terms (contact) in every `.vtu`.
 //!
 //! Files of an earlier run that this run would write under the same names
@@ -25,7 +27,7 @@ use crate::analysis::Analysis;
 use crate::atomic::write_atomic;
 use crate::driver::IncrementInfo;
 use crate::error::{FemError, Result};
-use crate::report::FILE_NAMES;
+use crate::report::{FILE_NAMES, csv_field};
 use crate::results::{boundary_reactions, stress_fields};
 use crate::vtu::{Field, Grid, pvd_string, vtk_cell, vtu_string};
 
@@ -113,7 +115,9 @@ impl ResultWriter {
             } else {
                 format!("{}#{}", b.name, same + 1)
             };
-            let _ = write!(history, ",{0}_Rx,{0}_Ry,{0}_Rz", name);
+            for axis in ["Rx", "Ry", "Rz"] {
+                let _ = write!(history, ",{}", csv_field(&format!("{name}_{axis}")));
+            }
         }
         Ok(Self {
             dir: dir.to_path_buf(),
@@ -134,7 +138,7 @@ impl ResultWriter {
         if !self.header_done {
             // Extra columns (contact) are known from the first increment on.
             for (name, _) in info.history {
-                let _ = write!(self.history, ",{name}");
+                let _ = write!(self.history, ",{}", csv_field(name));
             }
             self.history.push('\n');
             self.header_done = true;
@@ -144,7 +148,7 @@ impl ResultWriter {
             self.history,
             "{},{},{},{},{},{},{:e},{:e}",
             info.step + 1,
-            info.step_name,
+            csv_field(info.step_name),
             info.increment,
             info.load_factor,
             info.time,

@@ -13,8 +13,11 @@
 //!   pressure against `r` with Hertz and the fitted profile) and `hertz_force_approach.png`
 //!   (measured approach, approach minus the fitted linear term `c F`, and Hertz's `δ(F)`).
 //!
+//! Text fields of every CSV the program writes go through [`csv_field`] (RFC 4180 quoting).
+//!
 //! [`compare_newton`] overlays one increment of several result folders (`tricontact plot`).
 
+use std::borrow::Cow;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -50,6 +53,17 @@ pub const FILE_NAMES: [&str; 7] = [
     HERTZ_PRESSURE_PNG,
     HERTZ_FORCE_APPROACH_PNG,
 ];
+
+/// A CSV field as RFC 4180 writes it: in double quotes, inner quotes doubled, when it holds a
+/// comma, a double quote, CR or LF; unchanged otherwise (numbers never need quotes).
+#[must_use]
+pub fn csv_field(s: &str) -> Cow<'_, str> {
+    if s.contains([',', '"', '\r', '\n']) {
+        Cow::Owned(format!("\"{}\"", s.replace('"', "\"\"")))
+    } else {
+        Cow::Borrowed(s)
+    }
+}
 
 /// Residual history of one increment.
 #[derive(Clone, Debug, PartialEq)]
@@ -535,6 +549,16 @@ mod tests {
         let lines = rec.hertz_summary();
         assert!(lines[0].contains("too few"), "{lines:?}");
         assert!(!lines.concat().to_lowercase().contains("nan"));
+    }
+
+    #[test]
+    fn csv_fields_are_quoted_only_when_needed() {
+        assert_eq!(csv_field("clamp_Rx"), "clamp_Rx");
+        assert!(matches!(csv_field("1.5e-3"), Cow::Borrowed(_)));
+        assert_eq!(csv_field("clamp,left_Rx"), "\"clamp,left_Rx\"");
+        assert_eq!(csv_field("a \"b\""), "\"a \"\"b\"\"\"");
+        assert_eq!(csv_field("a\r\nb"), "\"a\r\nb\"");
+        assert_eq!(csv_field(""), "");
     }
 
     #[test]

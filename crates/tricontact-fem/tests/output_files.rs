@@ -1,6 +1,6 @@
 //! The result folder as a whole: a run that fails after an earlier one leaves only the files it
 //! wrote itself (no stale `.pvd`, tables or plots of the earlier run), never touching files the
-//! program did not name.
+//! program did not name; CSV fields that hold commas, quotes or line breaks are quoted (RFC 4180).
 
 mod common;
 
@@ -138,5 +138,68 @@ fn run_without_history_or_vtu_removes_the_earlier_ones() {
     let mut writer = ResultWriter::new(&quiet, &dir, "m").expect("writer");
     run(&quiet, &mut NoExtra, &mut |info| writer.write(&quiet, info)).expect("run");
     assert!(names(&dir).is_empty(), "{:?}", names(&dir));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Splits RFC 4180 text into records of fields (quoted fields may hold commas, `""` and line
+/// breaks).
+fn parse_csv(text: &str) -> Vec<Vec<String>> {
+    let (mut rows, mut row, mut field) = (Vec::new(), Vec::new(), String::new());
+    let (mut quoted, mut chars) = (false, text.chars().peekable());
+    while let Some(c) = chars.next() {
+        match (quoted, c) {
+            (true, '"') if chars.peek() == Some(&'"') => {
+                chars.next();
+                field.push('"');
+            }
+            (true, '"') => quoted = false,
+            (true, c) => field.push(c),
+            (false, '"') if field.is_empty() => quoted = true,
+            (false, ',') => row.push(std::mem::take(&mut field)),
+            (false, '\n') => {
+                row.push(std::mem::take(&mut field));
+                rows.push(std::mem::take(&mut row));
+            }
+            (false, c) => field.push(c),
+        }
+    }
+    assert!(
+        !quoted && field.is_empty() && row.is_empty(),
+        "unterminated"
+    );
+    rows
+}
+
+#[test]
+fn names_with_commas_quotes_and_line_breaks_are_quoted() {
+    let mut an = analysis(&MODEL.replace("\"pull\"", "\"bend, phase 1\""));
+    an.boundaries[0].name = "clamp,left".into();
+    let mut second = an.boundaries[0].clone();
+    second.name = "say \"hi\"\nthere".into();
+    an.boundaries.push(second);
+    let dir = fresh_dir("quoted");
+    run_into(&an, &dir, None).expect("run");
+    let text = std::fs::read_to_string(dir.join("history.csv")).expect("history");
+    assert!(
+        text.starts_with(
+            "step,step_name,increment,load_factor,time,iterations,residual,relative_residual,\
+             \"clamp,left_Rx\",\"clamp,left_Ry\",\"clamp,left_Rz\",\"say \"\"hi\"\"\nthere_Rx\","
+        ),
+        "{text}"
+    );
+    let rows = parse_csv(&text);
+    assert_eq!(rows.len(), 4);
+    assert_eq!(
+        rows[0][8..11],
+        ["clamp,left_Rx", "clamp,left_Ry", "clamp,left_Rz"]
+    );
+    assert_eq!(rows[0][11], "say \"hi\"\nthere_Rx");
+    for row in &rows {
+        assert_eq!(row.len(), 14, "{row:?}");
+    }
+    assert!(rows[1..].iter().all(|r| r[1] == "bend, phase 1"));
+    assert!(text.contains("\n1,\"bend, phase 1\",1,"), "{text}");
+    let newton = std::fs::read_to_string(dir.join("newton.csv")).expect("newton");
+    assert!(parse_csv(&newton).iter().all(|r| r.len() == 4));
     let _ = std::fs::remove_dir_all(&dir);
 }
