@@ -5,6 +5,10 @@
 //! labels `1e<k>`, so all charts share one coordinate type. Text uses the DejaVu Sans font
 //! embedded in the crate (`assets/`, Bitstream Vera licence), so plotting needs no system fonts.
 //! Files are written atomically ([`write_atomic_with`]), like every other result file.
+//!
+//! Errors are one line, `cannot write plot <path>: <reason>`: a name not ending in `.png` is
+//! refused before drawing, and an unwritable path gives the operating system's reason (the file is
+//! created before drawing, so the backend's own error, a debug dump, is rarely seen).
 
 use std::path::Path;
 use std::sync::Once;
@@ -17,6 +21,9 @@ use crate::error::{FemError, Result};
 
 static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
 static REGISTER: Once = Once::new();
+
+/// The format of every chart, chosen by the bitmap backend from the file name.
+const EXTENSION: &str = "png";
 
 /// How a series is drawn.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -58,6 +65,12 @@ impl Series {
             mark: Mark::Points,
         }
     }
+
+    /// Whether a point of the series would be drawn (finite; positive `y` on a log axis).
+    #[must_use]
+    pub fn is_drawn(&self, log_y: bool) -> bool {
+        self.points.iter().any(|&p| drawn(p, log_y))
+    }
 }
 
 /// Axis titles and scale of a chart.
@@ -86,8 +99,40 @@ const COLOURS: [RGBColor; 8] = [
     RGBColor(127, 127, 127),
 ];
 
-fn plot_error(path: &Path, e: impl std::fmt::Display) -> FemError {
-    FemError::Output(format!("plot {}: {e}", path.display()))
+/// Whether the point `p` is drawn: finite, and positive `y` on a log axis.
+fn drawn(p: (f64, f64), log_y: bool) -> bool {
+    p.0.is_finite() && p.1.is_finite() && (!log_y || p.1 > 0.0)
+}
+
+/// `cannot write plot <path>: <reason>`.
+fn plot_error(path: &Path, reason: impl std::fmt::Display) -> FemError {
+    FemError::Output(format!("cannot write plot {}: {reason}", path.display()))
+}
+
+/// The operating system's message of `e`, without the ` (os error N)` suffix.
+fn io_reason(e: &std::io::Error) -> String {
+    let text = e.to_string();
+    e.raw_os_error()
+        .and_then(|code| text.strip_suffix(&format!(" (os error {code})")))
+        .map_or_else(|| text.clone(), str::to_string)
+}
+
+/// Refuses a chart path whose name does not end in `.png` (any case).
+///
+/// # Errors
+/// [`FemError::Output`] naming the path.
+pub fn check_png(path: &Path) -> Result<()> {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case(EXTENSION))
+    {
+        Ok(())
+    } else {
+        Err(plot_error(
+            path,
+            format_args!("the file name must end in .{EXTENSION}"),
+        ))
+    }
 }
 
 /// Finite data range with a margin; `(0, 1)` when empty.
@@ -133,8 +178,9 @@ fn tick(v: f64) -> String {
 /// Draws `series` into a PNG at `path` (written atomically).
 ///
 /// # Errors
-/// Drawing or file errors.
+/// A name not ending in `.png`, drawing or file errors (one line naming `path`).
 pub fn chart(path: &Path, axes: &Axes<'_>, series: &[Series]) -> Result<()> {
+    check_png(path)?;
     REGISTER.call_once(|| {
         // The embedded font is valid; a failure only means default glyphs are missing.
         let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
@@ -144,7 +190,7 @@ pub fn chart(path: &Path, axes: &Axes<'_>, series: &[Series]) -> Result<()> {
         .map(|s| {
             s.points
                 .iter()
-                .filter(|p| p.0.is_finite() && p.1.is_finite() && (!axes.log_y || p.1 > 0.0))
+                .filter(|&&p| drawn(p, axes.log_y))
                 .map(|&(x, y)| (x, if axes.log_y { y.log10() } else { y }))
                 .collect()
         })
@@ -152,6 +198,8 @@ pub fn chart(path: &Path, axes: &Axes<'_>, series: &[Series]) -> Result<()> {
     let (x0, x1) = range(data.iter().flatten().map(|p| p.0), false);
     let (y0, y1) = range(data.iter().flatten().map(|p| p.1), axes.log_y);
     write_atomic_with(path, |tmp| {
+        // An unwritable folder fails here with its I/O error, not after drawing.
+        std::fs::File::create(tmp).map_err(|e| FemError::io(tmp, e))?;
         let root = BitMapBackend::new(tmp, (900, 600)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| plot_error(path, e))?;
         let mut chart = ChartBuilder::on(&root)
@@ -202,6 +250,10 @@ pub fn chart(path: &Path, axes: &Axes<'_>, series: &[Series]) -> Result<()> {
             .map_err(|e| plot_error(path, e))?;
         root.present().map_err(|e| plot_error(path, e))
     })
+    .map_err(|e| match e {
+        FemError::Io { source, .. } => plot_error(path, io_reason(&source)),
+        other => other,
+    })
 }
 
 #[cfg(test)]
@@ -232,6 +284,24 @@ mod tests {
         assert_eq!(&bytes[1..4], b"PNG");
         assert!(!dir.join("chart.tmp.png").exists());
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn only_png_names_are_accepted() {
+        assert!(check_png(Path::new("a/b.png")).is_ok());
+        assert!(check_png(Path::new("B.PNG")).is_ok());
+        for bad in ["p.txt", "png", "p.png.bak"] {
+            let e = check_png(Path::new(bad)).expect_err(bad).to_string();
+            assert!(
+                e.ends_with(&format!(
+                    "cannot write plot {bad}: the file name must end in .png"
+                )),
+                "{e}"
+            );
+        }
+        let e = std::io::Error::from_raw_os_error(2);
+        assert_eq!(io_reason(&e), "No such file or directory");
+        assert_eq!(io_reason(&std::io::Error::other("full")), "full");
     }
 
     #[test]

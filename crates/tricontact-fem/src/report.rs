@@ -26,7 +26,7 @@ use crate::atomic::write_atomic;
 use crate::driver::IncrementInfo;
 use crate::error::{FemError, Result};
 use crate::hertz::{HertzSample, HertzSetup, fit_approach};
-use crate::plots::{Axes, Series, chart};
+use crate::plots::{Axes, Series, chart, check_png};
 
 /// `newton.csv`: the residual of every Newton iteration.
 const NEWTON_CSV: &str = "newton.csv";
@@ -462,34 +462,53 @@ pub fn read_newton(dir: &Path) -> Result<Vec<NewtonLog>> {
     Ok(logs)
 }
 
+/// The residual series of one increment (`pick`, 1-based; the last one when `None`) of the
+/// result folder `dir`, labelled by folder name.
+///
+/// # Errors
+/// An unreadable `newton.csv`, a missing increment, or one with nothing to plot.
+fn folder_series(dir: &Path, pick: Option<(usize, usize)>) -> Result<Series> {
+    let logs = read_newton(dir)?;
+    let log = match pick {
+        Some((s, i)) => logs.iter().find(|l| l.step + 1 == s && l.increment == i),
+        None => logs.last(),
+    }
+    .ok_or_else(|| {
+        FemError::Output(format!(
+            "{}: no increment {} in newton.csv",
+            dir.display(),
+            pick.map_or("(empty file)".into(), |(s, i)| format!("{i} of step {s}"))
+        ))
+    })?;
+    let mut series = newton_series(log);
+    if !series.is_drawn(newton_axes().log_y) {
+        return Err(FemError::Output(format!(
+            "{}: increment {} of step {} has no finite positive residual: nothing to plot",
+            dir.join(NEWTON_CSV).display(),
+            log.increment,
+            log.step + 1
+        )));
+    }
+    let name = dir.file_name().map_or_else(
+        || dir.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    );
+    series.label = format!("{name} (step {} inc {})", log.step + 1, log.increment);
+    Ok(series)
+}
+
 /// Overlays the residual history of one increment (`step`, `increment`, 1-based; the last
 /// increment of the run when `None`) of each result folder, labelled by folder name.
 ///
 /// # Errors
-/// Unreadable folders, a missing increment, drawing errors.
+/// An output name not ending in `.png`, unreadable folders, a missing increment or one with
+/// nothing to plot, drawing or file errors.
 pub fn compare_newton(dirs: &[PathBuf], pick: Option<(usize, usize)>, out: &Path) -> Result<()> {
-    let mut series = Vec::new();
-    for dir in dirs {
-        let logs = read_newton(dir)?;
-        let log = match pick {
-            Some((s, i)) => logs.iter().find(|l| l.step + 1 == s && l.increment == i),
-            None => logs.last(),
-        }
-        .ok_or_else(|| {
-            FemError::Output(format!(
-                "{}: no increment {} in newton.csv",
-                dir.display(),
-                pick.map_or("(empty file)".into(), |(s, i)| format!("{i} of step {s}"))
-            ))
-        })?;
-        let name = dir.file_name().map_or_else(
-            || dir.display().to_string(),
-            |n| n.to_string_lossy().into_owned(),
-        );
-        let mut s = newton_series(log);
-        s.label = format!("{name} (step {} inc {})", log.step + 1, log.increment);
-        series.push(s);
-    }
+    check_png(out)?;
+    let series = dirs
+        .iter()
+        .map(|dir| folder_series(dir, pick))
+        .collect::<Result<Vec<_>>>()?;
     chart(out, &newton_axes(), &series)
 }
 

@@ -1,6 +1,7 @@
 //! The result folder as a whole: a run that fails after an earlier one leaves only the files it
 //! wrote itself (no stale `.pvd`, tables or plots of the earlier run), never touching files the
-//! program did not name; CSV fields that hold commas, quotes or line breaks are quoted (RFC 4180).
+//! program did not name; CSV fields that hold commas, quotes or line breaks are quoted (RFC 4180);
+//! a plot that cannot be written, or has nothing to show, fails with a one-line message.
 
 mod common;
 
@@ -11,7 +12,7 @@ use tricontact_fem::assembly::NoExtra;
 use tricontact_fem::driver::run;
 use tricontact_fem::mesh::ElementKind;
 use tricontact_fem::output::ResultWriter;
-use tricontact_fem::report::RunRecord;
+use tricontact_fem::report::{RunRecord, compare_newton};
 use tricontact_fem::structured::box_mesh;
 use tricontact_fem::{FemError, Result};
 
@@ -201,5 +202,61 @@ fn names_with_commas_quotes_and_line_breaks_are_quoted() {
     assert!(text.contains("\n1,\"bend, phase 1\",1,"), "{text}");
     let newton = std::fs::read_to_string(dir.join("newton.csv")).expect("newton");
     assert!(parse_csv(&newton).iter().all(|r| r.len() == 4));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A result folder whose `newton.csv` holds `residuals` for increment 1 of step 1.
+fn newton_folder(tag: &str, residuals: &[&str]) -> PathBuf {
+    let dir = fresh_dir(tag);
+    let mut csv = String::from("step,increment,iteration,relative_residual\n");
+    for (k, r) in residuals.iter().enumerate() {
+        csv.push_str(&format!("1,1,{k},{r}\n"));
+    }
+    std::fs::write(dir.join("newton.csv"), csv).expect("write");
+    dir
+}
+
+#[test]
+fn plot_errors_name_the_file_and_the_reason() {
+    let dir = newton_folder("plot-errors", &["1", "1e-3", "1e-9"]);
+    let folders = [dir.clone()];
+    let missing = dir.join("missing").join("p.png");
+    let e = compare_newton(&folders, None, &missing)
+        .expect_err("no folder")
+        .to_string();
+    let want = format!(
+        "cannot write plot {}: No such file or directory",
+        missing.display()
+    );
+    assert!(e.ends_with(&want), "{e}");
+    let txt = dir.join("p.txt");
+    let e = compare_newton(&folders, None, &txt)
+        .expect_err("not png")
+        .to_string();
+    let want = format!(
+        "cannot write plot {}: the file name must end in .png",
+        txt.display()
+    );
+    assert!(e.ends_with(&want), "{e}");
+    assert!(!txt.exists() && !dir.join("p.tmp.txt").exists());
+    let png = dir.join("p.png");
+    compare_newton(&folders, None, &png).expect("plot");
+    assert_eq!(&std::fs::read(&png).expect("png")[1..4], b"PNG");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn nothing_to_plot_is_an_error() {
+    let dir = newton_folder("plot-empty", &["NaN", "0", "-1e-3", "inf"]);
+    let png = dir.join("p.png");
+    let e = compare_newton(std::slice::from_ref(&dir), None, &png)
+        .expect_err("nothing to plot")
+        .to_string();
+    let file = dir.join("newton.csv");
+    assert!(
+        e.contains(&file.display().to_string()) && e.contains("nothing to plot"),
+        "{e}"
+    );
+    assert!(!png.exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
