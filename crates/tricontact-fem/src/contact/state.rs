@@ -22,8 +22,8 @@ pub struct NodeState {
     pub active: bool,
     /// Status changes in this increment (cycle detection).
     pub switches: u32,
-    /// Status frozen for the rest of the increment after cycling (penalty and augmented: closed).
-    pub frozen: Option<bool>,
+    /// Held closed for the rest of the increment after cycling.
+    pub held: bool,
     /// Facet changes in this increment (cycle detection).
     pub facet_switches: u32,
     /// Facet frozen for the rest of the increment after cycling.
