@@ -39,6 +39,8 @@ fn run_writes_vtu_pvd_and_history() {
     );
     assert!(stdout.contains("step 1 'bend' inc   1"), "{stdout}");
     assert!(stdout.contains("done: 6 increments"), "{stdout}");
+    // No contact pair, so no per-iteration contact notes.
+    assert!(!stdout.contains("contact:"), "{stdout}");
     let history = std::fs::read_to_string(out.join("history.csv")).expect("history");
     let rows: Vec<&str> = history.lines().collect();
     assert_eq!(rows.len(), 7, "{history}");

@@ -503,7 +503,8 @@ impl ExtraTerms for ContactTerms {
             }
         }
         self.trial_force = force;
-        self.note = Some(if frozen > 0 {
+        // A model without contact pairs has nothing to say per iteration.
+        self.note = (!self.pairs.is_empty()).then(|| if frozen > 0 {
             format!(
                 "contact: {active_count} closed, {changed} changed, {moved} changed facet, {frozen} frozen (cycling)"
             )
