@@ -160,7 +160,7 @@ impl ResultWriter {
                 0.0
             }
         );
-        for r in boundary_reactions(an, info.reactions) {
+        for r in boundary_reactions(an, info.step, info.reactions) {
             let _ = write!(self.history, ",{:e},{:e},{:e}", r[0], r[1], r[2]);
         }
         for (_, v) in info.history {

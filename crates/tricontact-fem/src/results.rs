@@ -86,15 +86,20 @@ pub fn stress_fields(an: &Analysis, u: &[f64], nlgeom: bool) -> StressFields {
     out
 }
 
-/// Sum of the reaction forces over the nodes of each boundary group.
+/// Sum of the reaction forces over the nodes of each boundary group, in step `step`: only the
+/// components the boundary prescribes in that step (0 for the others, and for a boundary that is
+/// not active in it, whose nodes another boundary may hold).
 #[must_use]
-pub fn boundary_reactions(an: &Analysis, reactions: &[f64]) -> Vec<[f64; 3]> {
+pub fn boundary_reactions(an: &Analysis, step: usize, reactions: &[f64]) -> Vec<[f64; 3]> {
     an.boundaries
         .iter()
         .map(|b| {
             let mut s = [0.0; 3];
+            if !b.active.get(step).copied().unwrap_or(false) {
+                return s;
+            }
             for &a in &b.nodes {
-                for i in 0..3 {
+                for i in (0..3).filter(|&i| b.values[i].is_some()) {
                     s[i] += reactions[3 * a + i];
                 }
             }

@@ -137,3 +137,25 @@ fn contact_block_leaves_no_node_inside_the_base() {
         "extrapolation: {n_linear} against {n_none} iterations"
     );
 }
+
+/// A boundary reports the reaction of the components it prescribes in the steps it is active in,
+/// and nothing in the others, even when another boundary then holds the same nodes
+/// (contact-block: `block_top` pushes down in "press", `block_top#2` drags in "slide").
+#[test]
+fn an_inactive_boundary_reports_no_reaction() {
+    let (_, an) = example("contact-block", "model.toml", None);
+    let press = an
+        .boundaries
+        .iter()
+        .position(|b| b.active == [true, false])
+        .expect("a press-only boundary");
+    let (_, records, _) = common::solve_contact(&an);
+    for r in &records {
+        let rz = r.reactions[press][2];
+        if r.step == 0 {
+            assert!(rz.abs() > 1.0, "press step: {rz}");
+        } else {
+            assert_eq!(r.reactions[press], [0.0; 3], "slide step");
+        }
+    }
+}

@@ -40,7 +40,7 @@ impl Record {
             iterations: info.iterations,
             residuals: info.residuals.to_vec(),
             reference: info.reference,
-            reactions: boundary_reactions(an, info.reactions),
+            reactions: boundary_reactions(an, info.step, info.reactions),
             u: info.u.to_vec(),
         }
     }
