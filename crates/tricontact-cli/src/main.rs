@@ -290,7 +290,7 @@ fn export(
     );
     let deck = inp::write(&an, &title).map_err(|e| format!("{}: {e}", model_path.display()))?;
     let path = output.unwrap_or_else(|| model_path.with_extension("inp"));
-    check_deck_path(&path)?;
+    check_deck_path(&path, &[model_path, &model.mesh_path()])?;
     atomic::write_atomic(&path, deck.text.as_bytes()).map_err(|e| e.to_string())?;
     for note in &deck.notes {
         say!("note: {note}");
@@ -299,10 +299,21 @@ fn export(
     Ok(())
 }
 
-/// A deck path must end in `.inp` (as `ccx` expects; it also keeps `-o` from replacing the model
-/// or its mesh) and, if it exists, be a regular file (the deck is written by renaming a temporary
+/// A deck path must not be the model or its mesh, must end in `.inp` (as `ccx` expects) and, if it
+/// exists, be a regular file (the deck is written by renaming a temporary
 /// file over it, which would replace a symbolic link or a device rather than write to it).
-fn check_deck_path(path: &Path) -> Result<(), String> {
+fn check_deck_path(path: &Path, inputs: &[&Path]) -> Result<(), String> {
+    let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    };
+    if let Some(input) = inputs.iter().find(|i| same(path, i)) {
+        return Err(format!(
+            "{}: is an input of the model ({}); not replaced",
+            path.display(),
+            input.display()
+        ));
+    }
     if path.extension().and_then(|e| e.to_str()) != Some("inp") {
         return Err(format!(
             "{}: the deck's name must end in .inp (ccx reads JOB.inp)",
@@ -345,7 +356,9 @@ fn check(model_path: &Path, mesh_override: Option<PathBuf>) -> Result<(), FemErr
         active,
         3 * active
     );
+    // A [hertz] table names a pair: only meaningful once every pair resolved.
     if let Some(h) = &model.hertz
+        && an.contacts.len() == model.contacts.len()
         && let Err(e) = HertzSetup::resolve(h, &an)
     {
         problems.push(e);
@@ -391,16 +404,11 @@ fn check(model_path: &Path, mesh_override: Option<PathBuf>) -> Result<(), FemErr
         say!("no problems found");
         Ok(())
     } else {
-        say!("{} problem(s):", problems.len());
-        for p in &problems {
-            say!("  - {p}");
+        let messages: Vec<String> = problems.iter().flat_map(FemError::messages).collect();
+        say!("{} problem(s):", messages.len());
+        for m in &messages {
+            say!("  - {m}");
         }
-        if problems.len() == 1 {
-            Err(problems.remove(0))
-        } else {
-            Err(FemError::Invalid(
-                problems.iter().map(ToString::to_string).collect(),
-            ))
-        }
+        Err(FemError::combine(problems).expect("at least one problem"))
     }
 }

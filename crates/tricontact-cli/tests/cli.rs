@@ -316,6 +316,17 @@ fn hertz_table_errors_name_the_key() {
             "unknown field `radious`",
         ),
         (
+            "radius = 20.0",
+            "radius = 20.0\ncentre = [nan, 0.0, 0.0]",
+            "[hertz] centre must be three finite numbers",
+        ),
+        (
+            // A rejected pair is reported alone, not again as a [hertz] without its pair.
+            "method = \"multiplier\"",
+            "method = \"multiplier\"\ntolerance = 0.0",
+            "tolerance must be > 0",
+        ),
+        (
             "symmetry = 4 ",
             "contact = \"a-b\"\nsymmetry = 4 ",
             "[hertz] contact: no pair 'a-b' (pairs: contact-flat)",
@@ -343,6 +354,9 @@ fn hertz_table_errors_name_the_key() {
                 !o.status.success() && text.contains(expect),
                 "{cmd}: {text}"
             );
+            assert!(!text.contains("needs a [[contact]] pair"), "{cmd}: {text}");
+            let last = String::from_utf8_lossy(&o.stderr);
+            assert!(last.matches("invalid model").count() <= 1, "{cmd}: {last}");
         }
     }
     // A missing `--mesh` file is named.
@@ -490,9 +504,22 @@ fn export_refuses_to_replace_what_is_not_a_deck() {
     std::fs::write(&target, "kept").expect("target");
     let link = dir.join("link.inp");
     std::os::unix::fs::symlink(&target, &link).expect("symlink");
+    let as_deck = dir.join("model.inp");
+    std::fs::write(&as_deck, &src).expect("model named .inp");
+    let o = bin()
+        .args(["export".as_ref(), as_deck.as_os_str()])
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && stderr.contains("is an input of the model"),
+        "{stderr}"
+    );
+    assert_eq!(std::fs::read_to_string(&as_deck).expect("kept"), src);
     for (out, expected) in [
-        (model.clone(), "must end in .inp"),
-        (mesh.clone(), "must end in .inp"),
+        (model.clone(), "is an input of the model"),
+        (mesh.clone(), "is an input of the model"),
+        (dir.join("deck.txt"), "must end in .inp"),
         (link.clone(), "not a regular file"),
     ] {
         let o = bin()
@@ -544,4 +571,34 @@ fn threads_beyond_the_cores_are_capped() {
         stderr.contains("note: --threads 100000: this machine has"),
         "{stderr}"
     );
+}
+
+/// `check` lists every problem once, and its final error line has one `invalid model:` prefix.
+#[test]
+fn check_lists_several_problems_with_one_prefix() {
+    let dir = temp_dir("check-many");
+    let src = std::fs::read_to_string(example()).expect("model");
+    let mesh = example().with_file_name("beam.msh");
+    let src = src
+        .replace("\"beam.msh\"", &format!("{mesh:?}"))
+        .replace("nu = 0.3", "nu = 0.7")
+        .replace("name = \"release-pressure\"", "name = \"bend\"");
+    let model = dir.join("model.toml");
+    std::fs::write(&model, src).expect("write");
+    let o = bin()
+        .args(["check".as_ref(), model.as_os_str()])
+        .output()
+        .expect("runs");
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    assert!(!o.status.success());
+    assert!(stdout.contains("2 problem(s):"), "{stdout}");
+    assert!(
+        stdout.contains("  - step name 'bend' is used twice"),
+        "{stdout}"
+    );
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert_eq!(stderr.matches("invalid model").count(), 1, "{stderr}");
 }

@@ -110,8 +110,9 @@ pub const MAX_INCREMENTS: usize = 1_000_000;
 /// Most halvings of an increment: 30 already make it 10⁻⁹ of the step.
 pub const MAX_CUTBACKS: usize = 30;
 
-/// Largest Young's modulus accepted: far beyond any unit system, and small enough that the
-/// default penalty `10 E h` and the stiffness matrix stay finite.
+/// Young's modulus accepted: `1/MAX_MODULUS < E < MAX_MODULUS`, far beyond any unit system at
+/// both ends, so that the default penalty `10 E h`, the stiffness matrix and the Lamé constants
+/// stay finite and nonzero.
 pub const MAX_MODULUS: f64 = 1e100;
 
 impl Analysis {
@@ -121,19 +122,10 @@ impl Analysis {
     /// # Errors
     /// Any validation problem.
     pub fn new(model: &Model, mesh: Mesh) -> Result<Self> {
-        let (an, mut problems) = Self::build(model, mesh);
-        match problems.len() {
-            0 => Ok(an),
-            1 => Err(problems.remove(0)),
-            _ => Err(FemError::Invalid(
-                problems
-                    .into_iter()
-                    .flat_map(|p| match p {
-                        FemError::Invalid(list) => list,
-                        other => vec![other.to_string()],
-                    })
-                    .collect(),
-            )),
+        let (an, problems) = Self::build(model, mesh);
+        match FemError::combine(problems) {
+            None => Ok(an),
+            Some(e) => Err(e),
         }
     }
 
@@ -196,6 +188,9 @@ impl Analysis {
             })
             .collect();
         for (i, s) in steps.iter().enumerate() {
+            if s.name.trim().is_empty() {
+                problems.push(invalid(format!("step {}: the name is empty", i + 1)));
+            }
             if steps[..i].iter().any(|t| t.name == s.name) {
                 problems.push(invalid(format!(
                     "step name '{}' is used twice (`steps = [...]` must name one step)",
@@ -254,10 +249,10 @@ impl Analysis {
         let mut materials = Vec::new();
         let mut mat_index = HashMap::new();
         for m in &model.materials {
-            let valid = m.e > 0.0 && m.e < MAX_MODULUS && m.nu > -1.0 && m.nu < 0.5;
+            let valid = m.e > 1.0 / MAX_MODULUS && m.e < MAX_MODULUS && m.nu > -1.0 && m.nu < 0.5;
             if !valid {
                 problems.push(invalid(format!(
-                    "material '{}': need 0 < E < 1e100 and -1 < nu < 0.5 (got E = {}, nu = {})",
+                    "material '{}': need 1e-100 < E < 1e100 and -1 < nu < 0.5 (got E = {:e}, nu = {})",
                     m.name, m.e, m.nu
                 )));
             }
@@ -402,6 +397,7 @@ impl Analysis {
         let in_body = active_nodes.clone();
         let mut rigid = vec![false; mesh.nodes.len()];
         let mut contacts = Vec::new();
+        let before_contacts = problems.len();
         {
             let youngs: Vec<f64> = body
                 .iter()
@@ -449,6 +445,9 @@ impl Analysis {
             }
         }
 
+        // Nodes belong to a body, or to a rigid master, only once both resolved.
+        let nodes_known = bodies_ok && problems.len() == before_contacts;
+
         // Boundaries.
         let mut boundaries = Vec::new();
         for b in &model.boundaries {
@@ -493,7 +492,7 @@ impl Analysis {
                 .copied()
                 .filter(|&a| active_nodes[a])
                 .collect();
-            if nodes.is_empty() && bodies_ok {
+            if nodes.is_empty() && nodes_known {
                 problems.push(invalid(format!(
                     "boundary '{}': the group has no node of any body",
                     b.group
@@ -506,25 +505,38 @@ impl Analysis {
                 active,
             });
         }
-        // Conflicting prescribed values on a shared DOF within a step.
+        // Conflicting prescribed values on a shared DOF within a step: one message per step and
+        // pair of boundaries (numbered as in the model), with the count and the first node.
         for s in 0..steps.len() {
-            let mut seen: HashMap<(usize, usize), (f64, &str)> = HashMap::new();
-            for b in boundaries.iter().filter(|b| b.active[s]) {
+            let mut seen: HashMap<(usize, usize), (f64, usize)> = HashMap::new();
+            let mut clashes: BTreeMap<(usize, usize), (usize, u64)> = BTreeMap::new();
+            for (bi, b) in boundaries.iter().enumerate().filter(|(_, b)| b.active[s]) {
                 for &a in &b.nodes {
                     for (i, v) in b.values.iter().enumerate() {
                         let Some(v) = *v else { continue };
-                        if let Some(&(w, other)) = seen.get(&(a, i)) {
-                            if w != v {
-                                problems.push(invalid(format!(
-                                    "step '{}': boundaries '{}' and '{}' prescribe different values on node {}",
-                                    steps[s].name, other, b.name, mesh.node_tags[a]
-                                )));
+                        match seen.get(&(a, i)) {
+                            Some(&(w, other)) if w != v => {
+                                let c =
+                                    clashes.entry((other, bi)).or_insert((0, mesh.node_tags[a]));
+                                c.0 += 1;
                             }
-                        } else {
-                            seen.insert((a, i), (v, &b.name));
+                            Some(_) => {}
+                            None => {
+                                seen.insert((a, i), (v, bi));
+                            }
                         }
                     }
                 }
+            }
+            for ((a, b), (count, node)) in clashes {
+                problems.push(invalid(format!(
+                    "step '{}': boundaries {} ('{}') and {} ('{}') prescribe different values on {count} node component(s), the first at node {node}",
+                    steps[s].name,
+                    a + 1,
+                    boundaries[a].name,
+                    b + 1,
+                    boundaries[b].name
+                )));
             }
         }
 
@@ -592,7 +604,7 @@ impl Analysis {
                         .copied()
                         .filter(|&a| active_nodes[a])
                         .collect();
-                    if faces.is_empty() && nodes.is_empty() && bodies_ok {
+                    if faces.is_empty() && nodes.is_empty() && nodes_known {
                         problems.push(invalid(format!(
                             "load '{}': the group has no node of any body",
                             l.group
@@ -617,7 +629,7 @@ impl Analysis {
                             f
                         }
                         Err(tag) => {
-                            if bodies_ok {
+                            if nodes_known {
                                 problems.push(invalid(format!(
                                     "load '{}': face {tag} is not on the surface of a body",
                                     l.group
@@ -635,7 +647,7 @@ impl Analysis {
                     continue;
                 }
             };
-            if forces.keys().any(|&a| !active_nodes[a]) && bodies_ok {
+            if forces.keys().any(|&a| !active_nodes[a]) && nodes_known {
                 problems.push(invalid(format!(
                     "load '{}': applied to nodes of no body",
                     l.group
@@ -652,6 +664,11 @@ impl Analysis {
         }
         if model.output.every == 0 {
             problems.push(invalid("output.every must be ≥ 1".into()));
+        }
+        if model.output.folder.as_os_str().is_empty() {
+            problems.push(invalid(
+                "output.folder is empty (give a folder; \".\" for the model's own)".into(),
+            ));
         }
 
         let an = Self {

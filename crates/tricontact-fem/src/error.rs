@@ -110,4 +110,26 @@ impl FemError {
             source,
         }
     }
+
+    /// The problem's messages without the `invalid model:` prefix, one per problem.
+    #[must_use]
+    pub fn messages(&self) -> Vec<String> {
+        match self {
+            Self::Invalid(list) => list.clone(),
+            other => vec![other.to_string()],
+        }
+    }
+
+    /// One error for a list of problems: `None` for none, the problem itself for one, else
+    /// [`FemError::Invalid`] listing every message once.
+    #[must_use]
+    pub fn combine(mut problems: Vec<Self>) -> Option<Self> {
+        match problems.len() {
+            0 => None,
+            1 => problems.pop(),
+            _ => Some(Self::Invalid(
+                problems.iter().flat_map(Self::messages).collect(),
+            )),
+        }
+    }
 }

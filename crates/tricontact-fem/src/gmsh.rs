@@ -203,7 +203,11 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<Mesh> {
             .cloned()
             .unwrap_or_else(|| tag.to_string())
     };
-    if let Some(elements) = &msh.data.elements {
+    let Some(elements) = &msh.data.elements else {
+        return Err(merr("the mesh has no $Elements section".into()));
+    };
+    let mut element_tags = std::collections::HashSet::new();
+    {
         for block in &elements.element_blocks {
             let dim = block.entity_dim;
             let phys = entity_phys
@@ -226,6 +230,12 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<Mesh> {
                 });
             }
             for el in &block.elements {
+                if !element_tags.insert(el.element_tag) {
+                    return Err(merr(format!(
+                        "element tag {} is defined twice",
+                        el.element_tag
+                    )));
+                }
                 let mut idx = Vec::with_capacity(el.nodes.len());
                 for t in &el.nodes {
                     let i = tag_to_index.get(t).copied().ok_or_else(|| {

@@ -181,6 +181,12 @@ impl HertzSetup {
         };
         let norm = def.axis.iter().map(|x| x * x).sum::<f64>().sqrt();
         let positive = |x: f64| x > 0.0 && x.is_finite();
+        if !def.centre.iter().all(|c| c.is_finite()) {
+            return Err(invalid(format!(
+                "centre must be three finite numbers (got {:?})",
+                def.centre
+            )));
+        }
         if !positive(def.radius) || !positive(modulus) || !positive(norm) || def.symmetry == 0 {
             return Err(invalid(format!(
                 "needs radius > 0, modulus > 0, a non-zero axis and symmetry ≥ 1 (got radius {}, modulus {modulus}, |axis| {norm}, symmetry {})",

@@ -206,12 +206,15 @@ fn values_that_would_give_nan_or_never_end_are_rejected_by_key() {
                  [[contact]]\nslave = \"solid\"\nmaster = \"base\"\nmethod = \"penalty\"\n\
                  [[contact]]\nslave = \"solid\"\nmaster = \"base\"\nmethod = \"penalty\"\n";
     let steps = "name = \"a\"\nmax_cutbacks = 1000\nresidual_tolerance = 0.0\n\
-                 [[step]]\nname = \"a\"\nincrements = 0\n";
+                 [[step]]\nname = \"a\"\nincrements = 0\n[[step]]\nname = \" \"\n\
+                 [[boundary]]\ngroup = \"solid\"\ndisplacement = { x = 1.0 }\n\
+                 [[boundary]]\ngroup = \"solid\"\ndisplacement = { x = 2.0 }\n\
+                 [output]\nfolder = \"\"\n";
     let text = model_text("solid", extra).replace("E = 1.0", "E = inf") + steps;
     let p = setup("nan", &msh(4, &TET), &text);
     let msg = load_analysis(&p).expect_err("invalid").to_string();
     for expected in [
-        "material 'm': need 0 < E < 1e100",
+        "material 'm': need 1e-100 < E < 1e100",
         "body group 'solid' is listed twice",
         "load 'base': non-finite force or pressure",
         "load 'solid': non-finite force or pressure",
@@ -221,6 +224,9 @@ fn values_that_would_give_nan_or_never_end_are_rejected_by_key() {
         "step 'a': max_cutbacks must be from 0 to 30 (got 1000)",
         "step 'a': residual_tolerance must be > 0 and < 1 (got 0)",
         "step 'a': increments must be from 1 to 1000000 (got 0)",
+        "step 3: the name is empty",
+        "boundaries 1 ('solid') and 2 ('solid') prescribe different values on 4 node component(s), the first at node",
+        "output.folder is empty",
     ] {
         assert!(msg.contains(expected), "missing «{expected}» in {msg}");
     }

@@ -144,3 +144,20 @@ fn a_tag_defined_twice_or_a_non_finite_coordinate_is_named() {
         "{e}"
     );
 }
+
+#[test]
+fn a_duplicate_element_tag_or_a_missing_elements_section_is_named() {
+    let path = file("../../examples/cantilever/beam.msh");
+    let text = std::fs::read_to_string(&path).expect("beam.msh");
+    // The first block's second element (tag 2) takes the first one's tag.
+    let duplicate = text.replacen("\n2 12 93 11 4 \n", "\n1 12 93 11 4 \n", 1);
+    assert_ne!(duplicate, text);
+    let e = parse_msh(duplicate.as_bytes(), &path).expect_err("duplicate tag");
+    assert!(
+        e.to_string().contains("element tag 1 is defined twice"),
+        "{e}"
+    );
+    let cut = &text[..text.find("$Elements").expect("$Elements")];
+    let e = parse_msh(cut.as_bytes(), &path).expect_err("no elements");
+    assert!(e.to_string().contains("no $Elements section"), "{e}");
+}

@@ -362,7 +362,7 @@ pub fn resolve(
     let e = owner_e(&master.elements).or(slave_e).unwrap_or(1.0);
     let (h_mean, h_max) = edge_lengths(mesh, &m_facets);
     let penalty = def.penalty.unwrap_or(10.0 * e * h_mean);
-    if !(penalty > 0.0 && penalty.is_finite()) {
+    if def.penalty.is_none() && !(penalty > 0.0 && penalty.is_finite()) {
         problems.push(format!(
             "contact '{name}': the default penalty 10 E h is {penalty:e} (E = {e:e}, h = {h_mean:e}); give `penalty`"
         ));
