@@ -209,6 +209,10 @@ impl<'a> Deck<'a> {
 
     fn materials(&mut self) {
         for (m, mat) in self.an.materials.iter().enumerate() {
+            // A material no body uses has no element set: CalculiX rejects a section without one.
+            if !self.an.body.iter().any(|b| b.material == m) {
+                continue;
+            }
             let (lambda, mu) = (mat.lambda, mat.mu);
             let _ = writeln!(self.model, "*MATERIAL, NAME=MAT{}", m + 1);
             match mat.law {
@@ -454,7 +458,12 @@ impl<'a> Deck<'a> {
                 self.copies[&base[2]]
             );
         }
-        let _ = writeln!(self.model, "*SOLID SECTION, ELSET={elset}, MATERIAL=MAT1");
+        // Held in every step, so any written material will do: that of the first body element.
+        let material = self.an.body.first().map_or(0, |b| b.material) + 1;
+        let _ = writeln!(
+            self.model,
+            "*SOLID SECTION, ELSET={elset}, MATERIAL=MAT{material}"
+        );
         self.notes.push(format!(
             "surface '{group}' has no volume: exported as {} held wedges of thickness {thickness:.4e}",
             facets.len()

@@ -267,6 +267,7 @@ fn rigid_flat_becomes_held_wedges_facing_the_slave() {
 fn tet10_edge_nodes_follow_calculix_order_and_neo_hooke_is_noted() {
     let mesh = box_mesh([1.0, 1.0, 1.0], [2, 2, 2], ElementKind::Tet10);
     let text = "[mesh]\nfile = \"none\"\n\
+        [[material]]\nname = \"unused\"\ntype = \"linear_elastic\"\nE = 1.0\nnu = 0.3\n\
         [[material]]\nname = \"m\"\ntype = \"neo_hooke\"\nE = 100.0\nnu = 0.25\n\
         [[body]]\ngroup = \"solid\"\nmaterial = \"m\"\n\
         [[boundary]]\ngroup = \"zmin\"\nfix = [\"x\", \"y\", \"z\"]\n\
@@ -278,6 +279,14 @@ fn tet10_edge_nodes_follow_calculix_order_and_neo_hooke_is_noted() {
     let x = nodes(&b);
     let tets = elements(&b, "C3D10");
     assert_eq!(tets.len(), an.body.len());
+    // Only the material a body uses is written: its section names the element set written.
+    assert!(!deck.text.contains("MAT1") && !deck.text.contains("EMAT1"));
+    assert!(
+        deck.text.contains("ELSET=EMAT2")
+            && deck
+                .text
+                .contains("*SOLID SECTION, ELSET=EMAT2, MATERIAL=MAT2")
+    );
     // CalculiX C3D10: nodes 5–10 on edges 1–2, 2–3, 3–1, 1–4, 2–4, 3–4.
     for v in tets.values() {
         let p = |i: usize| x[&v[i - 1]];
