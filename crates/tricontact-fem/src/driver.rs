@@ -347,6 +347,7 @@ pub fn run(
                         return Err(FemError::NotConverged {
                             step: step.name.clone(),
                             load_factor: t,
+                            target: t_new,
                             reason: format!("{failure} (after {} cutbacks)", step.max_cutbacks),
                         });
                     }

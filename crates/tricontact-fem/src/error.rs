@@ -84,12 +84,16 @@ pub enum FemError {
     #[error("singular system: {0}")]
     Singular(String),
     /// The analysis did not converge even after the allowed cutbacks.
-    #[error("step '{step}' did not converge at load factor {load_factor:.6}: {reason}")]
+    #[error(
+        "step '{step}' did not converge from load factor {load_factor:.6} to {target:.6}: {reason}"
+    )]
     NotConverged {
         /// Step name.
         step: String,
-        /// Load factor reached in the step.
+        /// Load factor reached in the step (the last converged increment).
         load_factor: f64,
+        /// Load factor the last attempt aimed at.
+        target: f64,
         /// Last failure reason.
         reason: String,
     },

@@ -211,4 +211,9 @@ fn exhausted_cutbacks_are_reported() {
         "{msg}"
     );
     assert!(msg.contains("after 1 cutbacks"), "{msg}");
+    // One increment, halved once: the last attempt aimed at half the step.
+    assert!(
+        msg.contains("from load factor 0.000000 to 0.500000"),
+        "{msg}"
+    );
 }
