@@ -35,7 +35,11 @@ pub fn write_atomic_with(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -
     });
     if let Err(e) = done {
         let _ = std::fs::remove_file(&tmp);
-        return Err(e);
+        // The user named `path`, not its temporary twin: an I/O error names `path`.
+        return Err(match e {
+            FemError::Io { path: p, source } if p == tmp => FemError::io(path, source),
+            other => other,
+        });
     }
     std::fs::rename(&tmp, path).map_err(|e| FemError::io(path, e))
 }
@@ -70,6 +74,15 @@ mod tests {
             Err(FemError::Output("refused".into()))
         });
         assert!(failed.is_err());
+        // An I/O error names the file asked for, not the temporary one.
+        let missing = dir.join("no-such-folder").join("b.txt");
+        let e = write_atomic(&missing, b"x")
+            .expect_err("no folder")
+            .to_string();
+        assert!(
+            e.contains("no-such-folder/b.txt") && !e.contains(".tmp"),
+            "{e}"
+        );
         assert_eq!(std::fs::read(&p).expect("read"), b"two");
         assert!(!dir.join("a.tmp.txt").exists());
         std::fs::remove_dir_all(&dir).ok();

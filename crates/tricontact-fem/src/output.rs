@@ -91,6 +91,12 @@ impl ResultWriter {
     /// # Errors
     /// When the folder cannot be created.
     pub fn new(an: &Analysis, dir: &Path, stem: &str) -> Result<Self> {
+        if dir.exists() && !dir.is_dir() {
+            return Err(FemError::Output(format!(
+                "{}: exists and is not a folder (the result folder)",
+                dir.display()
+            )));
+        }
         std::fs::create_dir_all(dir).map_err(|e| FemError::io(dir, e))?;
         remove_stale(dir, stem)?;
         let cells = an

@@ -142,6 +142,24 @@ fn run_without_history_or_vtu_removes_the_earlier_ones() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+#[test]
+fn a_result_folder_that_is_a_file_is_named() {
+    let an = analysis(MODEL);
+    let dir = fresh_dir("folder-file");
+    let file = dir.join("results");
+    std::fs::write(&file, "not a folder").expect("file");
+    let e = ResultWriter::new(&an, &file, "m")
+        .err()
+        .expect("a file")
+        .to_string();
+    assert!(e.contains("results: exists and is not a folder"), "{e}");
+    assert_eq!(
+        std::fs::read_to_string(&file).expect("kept"),
+        "not a folder"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// Splits RFC 4180 text into records of fields (quoted fields may hold commas, `""` and line
 /// breaks).
 fn parse_csv(text: &str) -> Vec<Vec<String>> {
