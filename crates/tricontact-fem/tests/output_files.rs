@@ -148,10 +148,10 @@ fn a_result_folder_that_is_a_file_is_named() {
     let dir = fresh_dir("folder-file");
     let file = dir.join("results");
     std::fs::write(&file, "not a folder").expect("file");
-    let e = ResultWriter::new(&an, &file, "m")
-        .err()
-        .expect("a file")
-        .to_string();
+    let Err(e) = ResultWriter::new(&an, &file, "m") else {
+        panic!("a file accepted as the result folder");
+    };
+    let e = e.to_string();
     assert!(e.contains("results: exists and is not a folder"), "{e}");
     assert_eq!(
         std::fs::read_to_string(&file).expect("kept"),
