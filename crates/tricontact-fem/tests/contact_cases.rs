@@ -609,3 +609,26 @@ fn a_rigid_master_facing_away_from_the_slave_is_rejected() {
         "{msg}"
     );
 }
+
+/// A degenerate master face is named by its Gmsh tag and node tag, not by internal indices.
+#[test]
+fn a_degenerate_master_face_is_named_by_its_tags() {
+    let folder =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/contact-block");
+    let model = Model::load(&folder.join("model.toml")).expect("model");
+    let mut mesh = tricontact_fem::gmsh::read_msh(&model.mesh_path()).expect("mesh");
+    let face = mesh
+        .elements
+        .iter_mut()
+        .find(|e| e.tag == 65)
+        .expect("face 65");
+    face.nodes[3] = face.nodes[2];
+    let node = mesh.node_tags[face.nodes[2]];
+    let msg = Analysis::new(&model, mesh)
+        .expect_err("degenerate")
+        .to_string();
+    assert!(
+        msg.contains(&format!("face 65 repeats node {node}")),
+        "{msg}"
+    );
+}

@@ -191,6 +191,26 @@ fn edge_lengths(mesh: &Mesh, facets: &[[u32; 3]]) -> (f64, f64) {
 }
 
 /// The mesh's node coordinates as kernel vectors.
+/// A surface error in the mesh's terms: a facet by the Gmsh tag of its face, a node by its tag.
+fn surface_error(
+    name: &str,
+    e: &tricontact::search::SurfaceError,
+    face_tags: &[u64],
+    mesh: &Mesh,
+) -> String {
+    match e {
+        tricontact::search::SurfaceError::RepeatedNode { facet, node } => format!(
+            "contact '{name}': face {} repeats node {} (a degenerate face)",
+            face_tags.get(*facet).copied().unwrap_or_default(),
+            mesh.node_tags
+                .get(*node as usize)
+                .copied()
+                .unwrap_or_default()
+        ),
+        other => format!("contact '{name}': {other}"),
+    }
+}
+
 /// Area-weighted outward normal at each node of `facets` (oriented out of their body).
 fn outward_normals(mesh: &Mesh, facets: &[[u32; 3]]) -> HashMap<usize, Vec3> {
     let x = |a: u32| {
@@ -370,10 +390,8 @@ pub fn resolve(
     if !problems.is_empty() {
         return Err(problems);
     }
-    let surface = match Surface::new(m_facets, mesh.nodes.len()) {
-        Ok(s) => s,
-        Err(e) => return Err(vec![format!("contact '{name}': {e}")]),
-    };
+    let surface = Surface::new(m_facets, mesh.nodes.len())
+        .map_err(|e| vec![surface_error(&name, &e, &m_tags, mesh)])?;
     let mut report = Vec::new();
     // Initial penetrations and adjust.
     {
@@ -461,7 +479,7 @@ pub fn resolve(
         let areas = m_nodes.iter().map(|a| m_areas[a]).collect();
         let (_, s_max) = edge_lengths(mesh, &s_facets);
         let surface = Surface::new(s_facets, mesh.nodes.len())
-            .map_err(|e| vec![format!("contact '{name}': {e}")])?;
+            .map_err(|e| vec![surface_error(&name, &e, &s_tags, mesh)])?;
         passes.push(Pass {
             slaves: m_nodes,
             areas,
