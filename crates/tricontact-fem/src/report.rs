@@ -164,12 +164,20 @@ impl RunRecord {
             .iter()
             .filter_map(|(n, _)| n.strip_suffix("_normal_force"))
             .map(|pair| {
+                let closed = get(&format!("{pair}_active"));
+                // Slave nodes of a node group have no area, hence no pressure.
+                let pressure = if closed > 0.0 && get(&format!("{pair}_area")) == 0.0 {
+                    "pressure not available (a node-group slave has no areas)".to_string()
+                } else {
+                    format!(
+                        "pressure {:.6e} … {:.6e}",
+                        get(&format!("{pair}_min_pressure")),
+                        get(&format!("{pair}_max_pressure"))
+                    )
+                };
                 format!(
-                    "contact {pair}: normal force {:.6e}, {} closed nodes, pressure {:.6e} … {:.6e}, largest penetration {:.3e}",
+                    "contact {pair}: normal force {:.6e}, {closed} closed nodes, {pressure}, largest penetration {:.3e}",
                     get(&format!("{pair}_normal_force")),
-                    get(&format!("{pair}_active")),
-                    get(&format!("{pair}_min_pressure")),
-                    get(&format!("{pair}_max_pressure")),
                     get(&format!("{pair}_max_penetration")),
                 )
             })
@@ -515,6 +523,32 @@ pub fn compare_newton(dirs: &[PathBuf], pick: Option<(usize, usize)>, out: &Path
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_node_group_slave_reports_no_pressure() {
+        let mut record = RunRecord::new(None);
+        let columns = |area: f64| {
+            [
+                ("normal_force", 10.0),
+                ("active", 4.0),
+                ("max_penetration", 0.0),
+                ("area", area),
+                ("min_pressure", 2.0),
+                ("max_pressure", 3.0),
+            ]
+            .map(|(k, v)| (format!("s-m_{k}"), v))
+            .to_vec()
+        };
+        record.last = columns(0.0);
+        let line = &record.contact_summary()[0];
+        assert!(
+            line.contains("4 closed nodes, pressure not available"),
+            "{line}"
+        );
+        record.last = columns(1.0);
+        let line = &record.contact_summary()[0];
+        assert!(line.contains("pressure 2.000000e0 … 3.000000e0"), "{line}");
+    }
     use crate::hertz::Hertz;
 
     fn record(samples: Vec<HertzSample>) -> RunRecord {
