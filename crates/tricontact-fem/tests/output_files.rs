@@ -5,6 +5,8 @@
 
 mod common;
 
+use common::CLAMPED_BLOCK;
+
 use std::path::{Path, PathBuf};
 
 use tricontact_fem::analysis::Analysis;
@@ -16,27 +18,12 @@ use tricontact_fem::report::{RunRecord, compare_newton};
 use tricontact_fem::structured::box_mesh;
 use tricontact_fem::{FemError, Result};
 
-const MODEL: &str = r#"
-[[material]]
-name = "m"
-type = "linear_elastic"
-E = 100.0
-nu = 0.25
-[[body]]
-group = "solid"
-material = "m"
-[[boundary]]
-group = "xmin"
-fix = ["x", "y", "z"]
-[[load]]
-group = "xmax"
-force = [1.0, 0.0, 0.0]
-[[step]]
-name = "pull"
-increments = 3
-[output]
-plots = true
-"#;
+/// The clamped block pulled at `xmax` in three increments, with plots.
+fn model() -> String {
+    format!(
+        "{CLAMPED_BLOCK}[[load]]\ngroup = \"xmax\"\nforce = [1.0, 0.0, 0.0]\n[[step]]\nname = \"pull\"\nincrements = 3\n[output]\nplots = true\n"
+    )
+}
 
 fn analysis(model: &str) -> Analysis {
     common::analysis(
@@ -79,7 +66,7 @@ fn names(dir: &Path) -> Vec<String> {
 
 #[test]
 fn failed_run_leaves_only_its_own_files() {
-    let an = analysis(MODEL);
+    let an = analysis(&model());
     let dir = fresh_dir("stale");
     run_into(&an, &dir, None).expect("first run");
     assert!(names(&dir).contains(&"newton.png".to_string()));
@@ -129,7 +116,7 @@ fn failed_run_leaves_only_its_own_files() {
 
 #[test]
 fn run_without_history_or_vtu_removes_the_earlier_ones() {
-    let an = analysis(MODEL);
+    let an = analysis(&model());
     let dir = fresh_dir("stale-off");
     run_into(&an, &dir, None).expect("first run");
     let mut quiet = an.clone();
@@ -144,7 +131,7 @@ fn run_without_history_or_vtu_removes_the_earlier_ones() {
 
 #[test]
 fn a_result_folder_that_is_a_file_is_named() {
-    let an = analysis(MODEL);
+    let an = analysis(&model());
     let dir = fresh_dir("folder-file");
     let file = dir.join("results");
     std::fs::write(&file, "not a folder").expect("file");
@@ -191,7 +178,7 @@ fn parse_csv(text: &str) -> Vec<Vec<String>> {
 
 #[test]
 fn names_with_commas_quotes_and_line_breaks_are_quoted() {
-    let mut an = analysis(&MODEL.replace("\"pull\"", "\"bend, phase 1\""));
+    let mut an = analysis(&model().replace("\"pull\"", "\"bend, phase 1\""));
     an.boundaries[0].name = "clamp,left".into();
     let mut second = an.boundaries[0].clone();
     second.name = "say \"hi\"\nthere".into();

@@ -5,30 +5,18 @@
 
 mod common;
 
+use common::CLAMPED_BLOCK;
+
 use tricontact_fem::assembly::NoExtra;
 use tricontact_fem::driver::run;
 use tricontact_fem::mesh::ElementKind;
 use tricontact_fem::output::ResultWriter;
 use tricontact_fem::structured::box_mesh;
 
-const BASE: &str = r#"
-[[material]]
-name = "m"
-type = "linear_elastic"
-E = 100.0
-nu = 0.25
-[[body]]
-group = "solid"
-material = "m"
-[[boundary]]
-group = "xmin"
-fix = ["x", "y", "z"]
-"#;
-
 #[test]
 fn released_displacement_unloads_linearly() {
     let text = format!(
-        "{BASE}[[boundary]]\ngroup = \"xmax\"\ndisplacement = {{ x = 0.2 }}\nsteps = [\"pull\"]\n[[step]]\nname = \"pull\"\n[[step]]\nname = \"release\"\nincrements = 4\n"
+        "{CLAMPED_BLOCK}[[boundary]]\ngroup = \"xmax\"\ndisplacement = {{ x = 0.2 }}\nsteps = [\"pull\"]\n[[step]]\nname = \"pull\"\n[[step]]\nname = \"release\"\nincrements = 4\n"
     );
     let an = common::analysis(
         box_mesh([2.0, 1.0, 1.0], [4, 2, 2], ElementKind::Hex8),
@@ -57,7 +45,7 @@ fn released_displacement_unloads_linearly() {
 #[test]
 fn every_vtu_and_history_switches() {
     let text = format!(
-        "{BASE}[[load]]\ngroup = \"xmax\"\nforce = [1.0, 0.0, 0.0]\n[[step]]\nname = \"a\"\nincrements = 3\n[output]\nevery = 2\n"
+        "{CLAMPED_BLOCK}[[load]]\ngroup = \"xmax\"\nforce = [1.0, 0.0, 0.0]\n[[step]]\nname = \"a\"\nincrements = 3\n[output]\nevery = 2\n"
     );
     let an = common::analysis(
         box_mesh([2.0, 1.0, 1.0], [2, 1, 1], ElementKind::Tet4),

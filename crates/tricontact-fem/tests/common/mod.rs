@@ -10,6 +10,22 @@ use tricontact_fem::mesh::Mesh;
 use tricontact_fem::model::Model;
 use tricontact_fem::results::boundary_reactions;
 
+/// A linear elastic block of the structured box meshes, clamped at `xmin` (model text without
+/// `[mesh]`, loads or steps).
+pub const CLAMPED_BLOCK: &str = r#"
+[[material]]
+name = "m"
+type = "linear_elastic"
+E = 100.0
+nu = 0.25
+[[body]]
+group = "solid"
+material = "m"
+[[boundary]]
+group = "xmin"
+fix = ["x", "y", "z"]
+"#;
+
 /// Model text without the `[mesh]` table, resolved against `mesh`.
 pub fn analysis(mesh: Mesh, body: &str) -> Analysis {
     let text = format!("[mesh]\nfile = \"unused.msh\"\n{body}");
