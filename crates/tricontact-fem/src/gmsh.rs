@@ -207,76 +207,74 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<Mesh> {
         return Err(merr("the mesh has no $Elements section".into()));
     };
     let mut element_tags = std::collections::HashSet::new();
-    {
-        for block in &elements.element_blocks {
-            let dim = block.entity_dim;
-            let phys = entity_phys
-                .get(&(dim, block.entity_tag))
-                .cloned()
-                .unwrap_or_default();
-            if phys.is_empty() {
-                continue;
+    for block in &elements.element_blocks {
+        let dim = block.entity_dim;
+        let phys = entity_phys
+            .get(&(dim, block.entity_tag))
+            .cloned()
+            .unwrap_or_default();
+        if phys.is_empty() {
+            continue;
+        }
+        let kind = kind_of(block.element_type);
+        let is_node_only = matches!(
+            block.element_type,
+            ElementType::Pnt | ElementType::Lin2 | ElementType::Lin3
+        ) || dim < 2;
+        if kind.is_none() && !is_node_only {
+            return Err(FemError::UnsupportedElement {
+                path: path.to_path_buf(),
+                kind: format!("{:?}", block.element_type),
+                group: group_name(dim, phys[0]),
+            });
+        }
+        for el in &block.elements {
+            if !element_tags.insert(el.element_tag) {
+                return Err(merr(format!(
+                    "element tag {} is defined twice",
+                    el.element_tag
+                )));
             }
-            let kind = kind_of(block.element_type);
-            let is_node_only = matches!(
-                block.element_type,
-                ElementType::Pnt | ElementType::Lin2 | ElementType::Lin3
-            ) || dim < 2;
-            if kind.is_none() && !is_node_only {
-                return Err(FemError::UnsupportedElement {
-                    path: path.to_path_buf(),
-                    kind: format!("{:?}", block.element_type),
-                    group: group_name(dim, phys[0]),
-                });
-            }
-            for el in &block.elements {
-                if !element_tags.insert(el.element_tag) {
-                    return Err(merr(format!(
-                        "element tag {} is defined twice",
+            let mut idx = Vec::with_capacity(el.nodes.len());
+            for t in &el.nodes {
+                let i = tag_to_index.get(t).copied().ok_or_else(|| {
+                    merr(format!(
+                        "element {} refers to unknown node {t}",
                         el.element_tag
-                    )));
-                }
-                let mut idx = Vec::with_capacity(el.nodes.len());
-                for t in &el.nodes {
-                    let i = tag_to_index.get(t).copied().ok_or_else(|| {
-                        merr(format!(
-                            "element {} refers to unknown node {t}",
-                            el.element_tag
-                        ))
-                    })?;
-                    idx.push(i);
-                }
-                let element_index = match kind {
-                    Some(k) if !is_node_only => {
-                        if idx.len() != k.num_nodes() {
-                            return Err(merr(format!(
-                                "element {} has {} nodes, expected {}",
-                                el.element_tag,
-                                idx.len(),
-                                k.num_nodes()
-                            )));
-                        }
-                        mesh.elements.push(Element {
-                            kind: k,
-                            nodes: idx.clone(),
-                            tag: el.element_tag,
-                        });
-                        Some(mesh.elements.len() - 1)
+                    ))
+                })?;
+                idx.push(i);
+            }
+            let element_index = match kind {
+                Some(k) if !is_node_only => {
+                    if idx.len() != k.num_nodes() {
+                        return Err(merr(format!(
+                            "element {} has {} nodes, expected {}",
+                            el.element_tag,
+                            idx.len(),
+                            k.num_nodes()
+                        )));
                     }
-                    _ => None,
-                };
-                for &p in &phys {
-                    let g = groups.entry((dim, p)).or_insert_with(|| Group {
-                        name: group_name(dim, p),
-                        dim: usize::try_from(dim).unwrap_or(0),
-                        elements: Vec::new(),
-                        nodes: Vec::new(),
+                    mesh.elements.push(Element {
+                        kind: k,
+                        nodes: idx.clone(),
+                        tag: el.element_tag,
                     });
-                    if let Some(e) = element_index {
-                        g.elements.push(e);
-                    }
-                    g.nodes.extend_from_slice(&idx);
+                    Some(mesh.elements.len() - 1)
                 }
+                _ => None,
+            };
+            for &p in &phys {
+                let g = groups.entry((dim, p)).or_insert_with(|| Group {
+                    name: group_name(dim, p),
+                    dim: usize::try_from(dim).unwrap_or(0),
+                    elements: Vec::new(),
+                    nodes: Vec::new(),
+                });
+                if let Some(e) = element_index {
+                    g.elements.push(e);
+                }
+                g.nodes.extend_from_slice(&idx);
             }
         }
     }
