@@ -230,6 +230,9 @@ pub fn external_forces(an: &Analysis, n_dofs: usize, s: usize, t: f64) -> Vec<f6
     f
 }
 
+/// Added to a singular-tangent failure of a model with multipliers: their usual cause.
+const MULTIPLIER_HINT: &str = "; with Lagrange multipliers this usually means slave nodes are prescribed along the contact normal, so their constraints act on the master nodes alone and repeat each other: free those components or use method = \"penalty\"";
+
 /// Most solves of one increment asked for by [`ExtraTerms::after_converged`].
 pub const MAX_OUTER: usize = 50;
 
@@ -338,8 +341,15 @@ pub fn run(
                 }
                 Err(failure) => {
                     extra.restore();
+                    let hint = match (&failure, extra.num_extra() > 0) {
+                        (Failure::Singular(_), true) => MULTIPLIER_HINT,
+                        _ => "",
+                    };
                     if let (Failure::Singular(m), false) = (&failure, step.nlgeom) {
-                        return Err(FemError::Singular(format!("step '{}': {m}", step.name)));
+                        return Err(FemError::Singular(format!(
+                            "step '{}': {m}{hint}",
+                            step.name
+                        )));
                     }
                     summary.cutbacks += 1;
                     attempts.push((t_new, failure.to_string()));
@@ -348,7 +358,10 @@ pub fn run(
                             step: step.name.clone(),
                             load_factor: t,
                             target: t_new,
-                            reason: format!("{failure} (after {} cutbacks)", step.max_cutbacks),
+                            reason: format!(
+                                "{failure} (after {} cutbacks){hint}",
+                                step.max_cutbacks
+                            ),
                         });
                     }
                 }

@@ -159,3 +159,26 @@ fn an_inactive_boundary_reports_no_reaction() {
         }
     }
 }
+
+/// Slave nodes prescribed along the normal leave multiplier constraints on the master nodes alone,
+/// which repeat each other: the singular tangent is reported with that likely cause.
+#[test]
+fn a_singular_multiplier_system_names_its_usual_cause() {
+    let (_, mut an) = example("contact-block", "model.toml", None);
+    let slaves = an.contacts[0].passes[0].slaves.clone();
+    an.boundaries.push(tricontact_fem::analysis::Boundary {
+        name: "slaves".into(),
+        nodes: slaves,
+        values: [None, None, Some(0.01)],
+        active: vec![true, false],
+    });
+    an.steps[0].max_cutbacks = 1;
+    let mut terms = tricontact_fem::contact::ContactTerms::new(&an);
+    let e = tricontact_fem::driver::run(&an, &mut terms, &mut |_| Ok(())).expect_err("singular");
+    let msg = e.to_string();
+    assert!(
+        msg.contains("singular")
+            && msg.contains("slave nodes are prescribed along the contact normal"),
+        "{msg}"
+    );
+}
