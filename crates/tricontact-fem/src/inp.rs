@@ -375,7 +375,7 @@ impl<'a> Deck<'a> {
         group: &str,
         faces: &[(usize, usize)],
     ) -> String {
-        let name = format!("SURF{}_{tag}_{}", p + 1, clean(group));
+        let name = surface_name(p, tag, group);
         let _ = writeln!(self.model, "*SURFACE, NAME={name}");
         for (b, s) in faces {
             let _ = writeln!(self.model, "{}, S{s}", b + 1);
@@ -468,7 +468,7 @@ impl<'a> Deck<'a> {
             "surface '{group}' has no volume: exported as {} held wedges of thickness {thickness:.4e}",
             facets.len()
         ));
-        let name = format!("SURF{}_{tag}_{}", p + 1, clean(group));
+        let name = surface_name(p, tag, group);
         let _ = writeln!(self.model, "*SURFACE, NAME={name}");
         for id in wedges {
             let _ = writeln!(self.model, "{id}, S1");
@@ -478,7 +478,7 @@ impl<'a> Deck<'a> {
     }
 
     fn node_surface(&mut self, p: usize, group: &str, nodes: &[usize]) -> String {
-        self.node_surface_named(&format!("SURF{}_S_{}", p + 1, clean(group)), nodes)
+        self.node_surface_named(&surface_name(p, "S", group), nodes)
     }
 
     fn node_surface_named(&mut self, name: &str, nodes: &[usize]) -> String {
@@ -582,6 +582,11 @@ fn write_nset(out: &mut String, name: &str, ids: impl Iterator<Item = usize>) {
     for line in ids.chunks(PER_LINE) {
         let _ = writeln!(out, "{}", line.join(", "));
     }
+}
+
+/// The deck's name of the surface of group `group` in contact pair `p` (`tag`: slave or master).
+fn surface_name(p: usize, tag: &str, group: &str) -> String {
+    format!("SURF{}_{tag}_{}", p + 1, clean(group))
 }
 
 /// A group name reduced to what CalculiX accepts in a set name.

@@ -190,7 +190,6 @@ fn edge_lengths(mesh: &Mesh, facets: &[[u32; 3]]) -> (f64, f64) {
     (sum / n.max(1) as f64, max)
 }
 
-/// The mesh's node coordinates as kernel vectors.
 /// A surface error in the mesh's terms: a facet by the Gmsh tag of its face, a node by its tag.
 fn surface_error(
     name: &str,
@@ -211,15 +210,13 @@ fn surface_error(
     }
 }
 
-/// Area-weighted outward normal at each node of `facets` (oriented out of their body).
-fn outward_normals(mesh: &Mesh, facets: &[[u32; 3]]) -> HashMap<usize, Vec3> {
-    let x = |a: u32| {
-        let p = mesh.nodes[a as usize];
-        Vec3::new(p[0], p[1], p[2])
-    };
+/// Area-weighted outward normal at each node of `facets` (oriented out of their body), at node
+/// positions `x`.
+fn outward_normals(x: &[Vec3], facets: &[[u32; 3]]) -> HashMap<usize, Vec3> {
     let mut normals: HashMap<usize, Vec3> = HashMap::new();
     for &[i, j, k] in facets {
-        let w = (x(j) - x(i)).cross(&(x(k) - x(i)));
+        let [xi, xj, xk] = [i, j, k].map(|a| x[a as usize]);
+        let w = (xj - xi).cross(&(xk - xi));
         for a in [i, j, k] {
             *normals.entry(a as usize).or_insert_with(Vec3::zeros) += w;
         }
@@ -227,6 +224,7 @@ fn outward_normals(mesh: &Mesh, facets: &[[u32; 3]]) -> HashMap<usize, Vec3> {
     normals
 }
 
+/// The mesh's node coordinates as kernel vectors.
 pub(crate) fn positions(mesh: &Mesh) -> Vec<Vec3> {
     mesh.nodes
         .iter()
@@ -407,7 +405,7 @@ pub fn resolve(
             .iter()
             .flatten()
             .all(|&a| !in_body[a as usize]);
-        let slave_normals = outward_normals(mesh, &s_facets);
+        let slave_normals = outward_normals(&x, &s_facets);
         let (mut facing, mut away) = (0usize, 0usize);
         for &a in &slaves {
             let Ok(idx) = u32::try_from(a) else { continue };
