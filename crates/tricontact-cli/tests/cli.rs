@@ -359,6 +359,22 @@ fn hertz_table_errors_name_the_key() {
             assert!(last.matches("invalid model").count() <= 1, "{cmd}: {last}");
         }
     }
+    // Without any contact pair, `check` says the [hertz] table needs one (`run` stops earlier,
+    // at the rigid flat that no pair holds any more).
+    let pair = "[[contact]]\nslave = \"contact\"\nmaster = \"flat\"\nmethod = \"multiplier\"\n";
+    assert!(base.contains(pair));
+    let model = out.join("no-pair.toml");
+    std::fs::write(&model, base.replace(pair, "")).expect("write");
+    let o = bin()
+        .args(["check".as_ref(), model.as_os_str()])
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(!o.status.success(), "{stdout}");
+    assert!(
+        stdout.contains("[hertz] needs a [[contact]] pair"),
+        "{stdout}"
+    );
     // A missing `--mesh` file is named.
     let missing = out.join("missing.msh");
     for cmd in ["check", "run"] {

@@ -199,7 +199,8 @@ fn old_msh_format_and_garbage_are_rejected_clearly() {
 #[test]
 fn values_that_would_give_nan_or_never_end_are_rejected_by_key() {
     // model_text ends with a bare `[[step]]`: its keys follow.
-    let extra = "[[body]]\ngroup = \"solid\"\nmaterial = \"m\"\n\
+    let extra = "[[material]]\nname = \"tiny\"\ntype = \"linear_elastic\"\nE = 1e-200\nnu = 0.3\n\
+                 [[body]]\ngroup = \"solid\"\nmaterial = \"m\"\n\
                  [[load]]\ngroup = \"base\"\npressure = nan\n\
                  [[load]]\ngroup = \"solid\"\nforce = [0.0, inf, 0.0]\n\
                  [[contact]]\nslave = \"base\"\nmaster = \"base\"\nmethod = \"penalty\"\n\
@@ -215,6 +216,7 @@ fn values_that_would_give_nan_or_never_end_are_rejected_by_key() {
     let msg = load_analysis(&p).expect_err("invalid").to_string();
     for expected in [
         "material 'm': need 1e-100 < E < 1e100",
+        "material 'tiny': need 1e-100 < E < 1e100 and -1 < nu < 0.5 (got E = 1e-200",
         "body group 'solid' is listed twice",
         "load 'base': non-finite force or pressure",
         "load 'solid': non-finite force or pressure",
