@@ -60,13 +60,12 @@ impl Material {
         if !nlgeom {
             return Some(linear_elastic::small_strain(self.lambda, self.mu, h));
         }
-        let f = Matrix3::identity() + h;
-        if f.determinant() <= 0.0 {
+        if 1.0 + neo_hooke::det_one_plus_minus_one(h) <= 0.0 {
             return None;
         }
         Some(match self.law {
-            Law::LinearElastic => linear_elastic::saint_venant_kirchhoff(self.lambda, self.mu, &f),
-            Law::NeoHooke => neo_hooke::first_piola(self.lambda, self.mu, &f)?,
+            Law::LinearElastic => linear_elastic::saint_venant_kirchhoff(self.lambda, self.mu, h),
+            Law::NeoHooke => neo_hooke::first_piola(self.lambda, self.mu, h)?,
         })
     }
 }
@@ -151,15 +150,41 @@ mod tests {
         }
     }
 
+    /// Down to strains of 10⁻¹³ the finite-strain stress differs from the small-strain one by the
+    /// quadratic terms only (relative difference `O(|H|)`), not by round-off: the stress of a stiff
+    /// model under a small load must not lose its digits to `F − F⁻ᵀ` or `ln det F` cancelling.
     #[test]
     fn finite_strain_reduces_to_small_strain() {
         for law in [Law::LinearElastic, Law::NeoHooke] {
-            let mat = Material::from_e_nu(law, 1000.0, 0.3);
-            let h = sample_h() * 1e-7;
-            let (p, _) = mat.response(&h, true).expect("admissible");
-            let (s, _) = mat.response(&h, false).expect("admissible");
-            assert!((p - s).norm() <= 1e-5 * s.norm());
+            for e in [1000.0, 2.1e11] {
+                let mat = Material::from_e_nu(law, e, 0.3);
+                for scale in [1e-4, 1e-7, 1e-10, 1e-13] {
+                    let h = sample_h() * scale;
+                    let (p, _) = mat.response(&h, true).expect("admissible");
+                    let (s, _) = mat.response(&h, false).expect("admissible");
+                    let rel = (p - s).norm() / s.norm();
+                    assert!(
+                        rel <= 5.0 * h.norm() + 1e-13,
+                        "{law:?} E {e} |H| {:.1e}: relative difference {rel:.2e}",
+                        h.norm()
+                    );
+                }
+            }
         }
+    }
+
+    #[test]
+    fn determinant_minus_one_matches_the_determinant() {
+        for scale in [1.0, 1e-3] {
+            let h = sample_h() * scale;
+            let direct = (Matrix3::identity() + h).determinant() - 1.0;
+            let expanded = neo_hooke::det_one_plus_minus_one(&h);
+            assert!((direct - expanded).abs() <= 1e-15, "{direct} vs {expanded}");
+        }
+        // Where the direct form has lost everything, the expansion keeps the trace.
+        let h = Matrix3::from_diagonal(&nalgebra::Vector3::new(3e-17, 0.0, 0.0));
+        assert_eq!((Matrix3::identity() + h).determinant() - 1.0, 0.0);
+        assert_eq!(neo_hooke::det_one_plus_minus_one(&h), 3e-17);
     }
 
     #[test]
