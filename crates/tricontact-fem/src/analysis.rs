@@ -296,8 +296,9 @@ impl Analysis {
                 )));
                 continue;
             };
-            match mesh.group(&b.group) {
-                Some(g) if g.dim == 3 => {
+            match mesh.lookup(&b.group, Some(3)) {
+                Err(m) => problems.push(invalid(format!("body: {m}"))),
+                Ok(Some(g)) if g.dim == 3 => {
                     for &e in &g.elements {
                         if owner[e].is_some() {
                             let entry = shared
@@ -314,11 +315,11 @@ impl Analysis {
                         });
                     }
                 }
-                Some(g) => problems.push(invalid(format!(
+                Ok(Some(g)) => problems.push(invalid(format!(
                     "body group '{}' has dimension {}, a volume (3D) group is needed",
                     g.name, g.dim
                 ))),
-                None => problems.push(unknown("volume", &b.group, &mesh)),
+                Ok(None) => problems.push(unknown("volume", &b.group, &mesh)),
             }
         }
         for ((a, b), (count, tag)) in shared {
@@ -452,9 +453,16 @@ impl Analysis {
         let mut boundaries = Vec::new();
         for b in &model.boundaries {
             let active = step_mask(&b.steps, &format!("boundary '{}'", b.group), &mut problems);
-            let Some(g) = mesh.group(&b.group) else {
-                problems.push(unknown("node", &b.group, &mesh));
-                continue;
+            let g = match mesh.lookup(&b.group, None) {
+                Ok(Some(g)) => g,
+                Ok(None) => {
+                    problems.push(unknown("node", &b.group, &mesh));
+                    continue;
+                }
+                Err(m) => {
+                    problems.push(invalid(format!("boundary: {m}")));
+                    continue;
+                }
             };
             let mut values = [None; 3];
             for c in &b.fix {
@@ -566,14 +574,21 @@ impl Analysis {
         let mut load_list = Vec::new();
         for l in &model.loads {
             let active = step_mask(&l.steps, &format!("load '{}'", l.group), &mut problems);
-            let Some(g) = mesh.group(&l.group) else {
-                let kind = if l.pressure.is_some() {
-                    "surface"
-                } else {
-                    "node"
-                };
-                problems.push(unknown(kind, &l.group, &mesh));
-                continue;
+            let g = match mesh.lookup(&l.group, l.pressure.is_some().then_some(2)) {
+                Ok(Some(g)) => g,
+                Ok(None) => {
+                    let kind = if l.pressure.is_some() {
+                        "surface"
+                    } else {
+                        "node"
+                    };
+                    problems.push(unknown(kind, &l.group, &mesh));
+                    continue;
+                }
+                Err(m) => {
+                    problems.push(invalid(format!("load: {m}")));
+                    continue;
+                }
             };
             let finite = l.force.is_none_or(|f| f.iter().all(|c| c.is_finite()))
                 && l.pressure.is_none_or(f64::is_finite);

@@ -172,7 +172,8 @@ impl HertzSetup {
         };
         let group = an
             .mesh
-            .group(&def.loaded)
+            .lookup(&def.loaded, None)
+            .map_err(|m| invalid(format!("loaded: {m}")))?
             .ok_or_else(|| invalid(format!("loaded: {}", unknown_group(an, &def.loaded))))?;
         let modulus = match def.modulus {
             Some(m) => m,

@@ -344,7 +344,7 @@ impl<'a> Deck<'a> {
         group: &str,
         pass: &crate::contact::pair::Pass,
     ) -> Result<String, InpError> {
-        let Some(g) = self.an.mesh.group(group) else {
+        let Some(g) = self.an.mesh.lookup(group, Some(2)).ok().flatten() else {
             return Err(InpError(format!("unknown surface group '{group}'")));
         };
         let faces: Option<Vec<(usize, usize)>> = g

@@ -111,10 +111,35 @@ pub struct Mesh {
 }
 
 impl Mesh {
-    /// Finds a group by name.
+    /// Finds a group by name (the one of lowest dimension if the name is used in several; the
+    /// model's references go through [`Mesh::lookup`], which reports that case).
     #[must_use]
     pub fn group(&self, name: &str) -> Option<&Group> {
         self.groups.iter().find(|g| g.name == name)
+    }
+
+    /// The group a model names, `Ok(None)` if there is none. Gmsh allows one name (or one
+    /// number, for unnamed groups) in several dimensions: then the group of dimension `dim` is
+    /// taken when the reference needs one (a body: 3, a contact or pressure surface: 2), and
+    /// otherwise the reference is ambiguous — an error naming the dimensions, since their node
+    /// sets differ.
+    ///
+    /// # Errors
+    /// The message when `name` is ambiguous.
+    pub fn lookup(&self, name: &str, dim: Option<usize>) -> Result<Option<&Group>, String> {
+        let found: Vec<&Group> = self.groups.iter().filter(|g| g.name == name).collect();
+        if found.len() <= 1 {
+            return Ok(found.first().copied());
+        }
+        if let Some(g) = dim.and_then(|d| found.iter().find(|g| g.dim == d)) {
+            return Ok(Some(g));
+        }
+        let dims: Vec<String> = found.iter().map(|g| format!("{}D", g.dim)).collect();
+        Err(format!(
+            "group '{name}' is ambiguous: the mesh has physical groups of that name in {}; \
+             give them different names in the .geo file",
+            dims.join(" and ")
+        ))
     }
 
     /// Comma-separated description of the groups, e.g. `beam (3D), tip (2D)`.

@@ -265,3 +265,20 @@ fn an_unresolved_body_is_reported_without_knock_on_errors() {
         "one problem: {msg}"
     );
 }
+
+#[test]
+fn a_name_used_in_two_dimensions_is_resolved_by_need_or_reported() {
+    // "solid" names the volume (3D, tag 1) and a surface (2D, tag 2), as Gmsh allows.
+    let mesh = msh(4, &TET).replace("2 2 \"base\"", "2 2 \"solid\"");
+    // A body needs a volume: it takes the 3D group (it used to take the 2D one and fail).
+    let fixed = "[[boundary]]\ngroup = \"solid\"\nfix = [\"x\", \"y\", \"z\"]\n";
+    let p = setup("two-dims", &mesh, &model_text("solid", fixed));
+    let msg = load_analysis(&p).expect_err("ambiguous").to_string();
+    assert!(!msg.contains("dimension 2"), "{msg}");
+    // A node set could be either: the boundary is refused, naming the dimensions.
+    assert!(
+        msg.contains("boundary: group 'solid' is ambiguous")
+            && msg.contains("in 2D and 3D; give them different names"),
+        "{msg}"
+    );
+}

@@ -276,16 +276,20 @@ pub fn resolve(
         problems.push(format!("contact '{name}': adjust must be ≥ 0 (got {d})"));
     }
     let node_elems = node_to_elements(mesh.nodes.len(), &bodies.elements);
-    let master = match mesh.group(&def.master) {
-        Some(g) if g.dim == 2 => Some(g.clone()),
-        Some(g) => {
+    let master = match mesh.lookup(&def.master, Some(2)) {
+        Err(m) => {
+            problems.push(format!("contact '{name}': master: {m}"));
+            None
+        }
+        Ok(Some(g)) if g.dim == 2 => Some(g.clone()),
+        Ok(Some(g)) => {
             problems.push(format!(
                 "contact '{name}': master '{}' has dimension {}, a surface (2D) group is needed",
                 g.name, g.dim
             ));
             None
         }
-        None => {
+        Ok(None) => {
             problems.push(format!(
                 "contact '{name}': unknown master surface group '{}' (groups: {})",
                 def.master,
@@ -294,14 +298,21 @@ pub fn resolve(
             None
         }
     };
-    let slave = mesh.group(&def.slave).cloned();
-    if slave.is_none() {
-        problems.push(format!(
-            "contact '{name}': unknown slave group '{}' (groups: {})",
-            def.slave,
-            mesh.group_list()
-        ));
-    }
+    let slave = match mesh.lookup(&def.slave, Some(2)) {
+        Ok(Some(g)) => Some(g.clone()),
+        Ok(None) => {
+            problems.push(format!(
+                "contact '{name}': unknown slave group '{}' (groups: {})",
+                def.slave,
+                mesh.group_list()
+            ));
+            None
+        }
+        Err(m) => {
+            problems.push(format!("contact '{name}': slave: {m}"));
+            None
+        }
+    };
     let (Some(master), Some(slave)) = (master, slave) else {
         return Err(problems);
     };
