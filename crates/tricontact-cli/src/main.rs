@@ -165,8 +165,12 @@ fn increment_line(info: &IncrementInfo<'_>) -> String {
         .iter()
         .map(|r| format!("{r:.1e}"))
         .collect();
+    let searches = match info.line_searches {
+        0 => String::new(),
+        n => format!(" ({n} line-search trials)"),
+    };
     format!(
-        "step {} '{}' inc {:>3}  t = {:.4}  iters {:>2}  cutbacks {}  {}  rel. residuals [{}]",
+        "step {} '{}' inc {:>3}  t = {:.4}  iters {:>2}{searches}  cutbacks {}  {}  rel. residuals [{}]",
         info.step + 1,
         info.step_name,
         info.increment,

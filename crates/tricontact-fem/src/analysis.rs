@@ -75,6 +75,8 @@ pub struct Step {
     pub max_cutbacks: usize,
     /// Newton's starting point of an increment.
     pub extrapolation: Extrapolation,
+    /// Line search along Newton corrections ([`crate::newton`]).
+    pub line_search: bool,
 }
 
 /// Everything the solver needs, resolved to indices.
@@ -185,6 +187,7 @@ impl Analysis {
                 nlgeom: s.nlgeom,
                 max_cutbacks: s.max_cutbacks,
                 extrapolation: s.extrapolation,
+                line_search: s.line_search,
             })
             .collect();
         for (i, s) in steps.iter().enumerate() {

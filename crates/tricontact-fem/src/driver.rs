@@ -48,6 +48,8 @@ pub struct IncrementInfo<'a> {
     pub time: f64,
     /// Newton iterations (linear solves).
     pub iterations: usize,
+    /// Line-search trials ([`crate::line_search`]): assemblies beyond one per iteration.
+    pub line_searches: usize,
     /// Residual norms (predictor, then each iteration).
     pub residuals: &'a [f64],
     /// Reference norm of the relative residual test.
@@ -324,6 +326,7 @@ pub fn run(
                         load_factor: t,
                         time: s as f64 + t,
                         iterations: c.iterations,
+                        line_searches: c.line_searches,
                         residuals: &c.residuals,
                         reference: c.reference,
                         cutbacks: control.cutbacks_here,
@@ -404,10 +407,12 @@ fn solve_with_outer(
         let mut notes = std::mem::take(&mut c.notes);
         notes.extend(next.notes.iter().cloned());
         let iterations = c.iterations + next.iterations;
+        let line_searches = c.line_searches + next.line_searches;
         c = Converged {
             residuals,
             notes,
             iterations,
+            line_searches,
             reference: c.reference.max(next.reference),
             ..next
         };

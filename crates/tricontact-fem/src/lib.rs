@@ -24,6 +24,7 @@ pub mod gmsh_nodes;
 pub mod hertz;
 pub mod hex8;
 pub mod inp;
+pub mod line_search;
 pub mod linear_elastic;
 pub mod linsolve;
 pub mod loads;

@@ -249,6 +249,9 @@ pub struct StepDef {
     /// Newton's starting point for the second and later increments of the step.
     #[serde(default)]
     pub extrapolation: Extrapolation,
+    /// Line search along each Newton correction (where the residual is an energy gradient).
+    #[serde(default)]
+    pub line_search: bool,
 }
 
 /// Where Newton starts an increment (`[[step]] extrapolation`).

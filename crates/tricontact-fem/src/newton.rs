@@ -18,6 +18,10 @@
 //!   of the next one (so a linear problem converges after one solve); the
 //!   floor `10⁻³‖u‖` keeps increments that change nothing from stalling.
 //!
+//! With `[[step]] line_search = true`, each correction after the predictor of a potential problem
+//! (no multipliers, no follower pressure) may be shortened by [`crate::line_search`] before the
+//! next iteration.
+//!
 //! Failure (triggers a cutback in [`crate::driver`]): no convergence within
 //! `max_iterations`, a non-finite or exploding residual (> 1e6 `r_ref`), an
 //! inverted element, or a singular tangent.
@@ -25,6 +29,7 @@
 use crate::analysis::{Analysis, Step};
 use crate::assembly::{AssemblyError, DofMap, ExtraTerms, NO_EQ, Pattern, assemble};
 use crate::follower;
+use crate::line_search::LineSearch;
 use crate::linsolve::{LinearSolver, Structure};
 
 /// A converged increment.
@@ -42,6 +47,8 @@ pub struct Converged {
     pub iterations: usize,
     /// Last factorization method.
     pub method: &'static str,
+    /// Line-search trials (assemblies beyond one per iteration).
+    pub line_searches: usize,
     /// Notes of the extra terms per assembly (see
     /// [`ExtraTerms::iteration_note`]), empty if it has none.
     pub notes: Vec<String>,
@@ -130,6 +137,10 @@ pub fn solve_increment(
     let mut iterations = 0usize;
     let mut predictor = true;
     let mut notes = Vec::new();
+    // Line search where the residual is an energy gradient: the correction being applied.
+    let searching = p.step.line_search && structure == Structure::SymmetricDefinite;
+    let mut search: Option<LineSearch> = None;
+    let mut line_searches = 0;
     // Small strain without extra or follower terms: the tangent is constant,
     // so the prescribed values are applied directly (the residual then
     // contains `K_fp Δu_p` exactly) and one factorization serves the step.
@@ -142,7 +153,7 @@ pub fn solve_increment(
     }
     loop {
         let need_tangent = !(constant_tangent && solver.cached.is_some());
-        let asm = assemble(
+        let asm = match assemble(
             an,
             dm,
             p.pat,
@@ -151,14 +162,21 @@ pub fn solve_increment(
             need_tangent,
             (predictor && !constant_tangent).then_some(dup.as_slice()),
             extra,
-        )
-        .map_err(|e| match e {
-            AssemblyError::Inverted(i) => inverted(i),
-            AssemblyError::Extra(m) => Failure::Diverged(m),
-        })?;
-        if let Some(n) = extra.iteration_note() {
-            notes.push(n);
-        }
+        ) {
+            Ok(asm) => asm,
+            Err(AssemblyError::Inverted(i)) => {
+                // A line search halves a correction that inverts an element.
+                if let Some(ls) = search.as_mut()
+                    && let Some(s) = ls.next(None)
+                {
+                    du_norm = ls.move_to(s, &mut u, dm);
+                    line_searches += 1;
+                    continue;
+                }
+                return Err(inverted(i));
+            }
+            Err(AssemblyError::Extra(m)) => return Err(Failure::Diverged(m)),
+        };
         let mut asm = asm;
         if !p.follower.is_empty() {
             let mut trip = Vec::new();
@@ -199,8 +217,19 @@ pub fn solve_increment(
         }
         let react = norm((0..dm.n_nodal).filter(|&d| dm.eq[d] == NO_EQ).map(|d| r[d]));
         let current = norm(rhs.iter().copied());
+        if let Some(ls) = search.as_mut()
+            && let Some(s) = ls.next(Some(ls.slope(&rhs)).filter(|g| g.is_finite()))
+        {
+            du_norm = ls.move_to(s, &mut u, dm);
+            line_searches += 1;
+            continue;
+        }
+        search = None;
         if !current.is_finite() {
             return Err(Failure::Diverged("non-finite residual".into()));
+        }
+        if let Some(n) = extra.iteration_note() {
+            notes.push(n);
         }
         residuals.push(current);
         reference = reference.max(react).max(residuals[0]);
@@ -223,6 +252,7 @@ pub fn solve_increment(
                     reference,
                     iterations,
                     method,
+                    line_searches,
                     notes,
                 });
             }
@@ -246,6 +276,7 @@ pub fn solve_increment(
                 reference,
                 iterations,
                 method,
+                line_searches,
                 notes,
             });
         }
@@ -274,6 +305,9 @@ pub fn solve_increment(
             }
         }
         du_norm = norm(du.iter().copied());
+        if searching && !predictor {
+            search = Some(LineSearch::new(du, &rhs));
+        }
         if predictor {
             for &(dof, v) in p.prescribed {
                 u[dof] = v;
