@@ -75,6 +75,20 @@ impl std::fmt::Display for Failure {
     }
 }
 
+/// Relative residual or correction below which an unmet tolerance is taken to ask for more than
+/// double precision gives: round-off in the assembled forces is about 10⁻¹⁶ of their terms, times
+/// the conditioning of the model.
+const ROUND_OFF: f64 = 1e-11;
+
+/// Why an increment stalled with its `quantity` (`"residual"` or `"displacement"`) at the relative
+/// value `value`, below [`ROUND_OFF`].
+fn round_off_hint(quantity: &str, value: f64) -> String {
+    format!(
+        "; the {quantity} test stalled at round-off ({value:.1e}): `{quantity}_tolerance` asks for \
+         more than double precision gives here — use 1e-10 or more"
+    )
+}
+
 fn norm(v: impl Iterator<Item = f64>) -> f64 {
     v.map(|x| x * x).sum::<f64>().sqrt()
 }
@@ -242,9 +256,9 @@ pub fn solve_increment(
             };
             let du_total =
                 norm(u.iter().zip(u0).map(|(a, b)| a - b)).max(1e-3 * norm(u.iter().copied()));
-            if rnorm <= p.step.residual_tolerance * reference
-                && du_norm * ratio <= p.step.displacement_tolerance * du_total
-            {
+            let residual_met = rnorm <= p.step.residual_tolerance * reference;
+            let correction = du_norm * ratio / du_total;
+            if residual_met && correction <= p.step.displacement_tolerance {
                 return Ok(Converged {
                     u,
                     residual: r,
@@ -262,10 +276,15 @@ pub fn solve_increment(
                 )));
             }
             if iterations >= p.step.max_iterations {
+                let relative = rnorm / reference;
+                let hint = match (residual_met, relative, correction) {
+                    (false, r, _) if r < ROUND_OFF => round_off_hint("residual", r),
+                    (true, _, c) if c < ROUND_OFF => round_off_hint("displacement", c),
+                    _ => String::new(),
+                };
                 return Err(Failure::Diverged(format!(
-                    "no convergence in {} iterations (relative residual {:.3e})",
-                    iterations,
-                    rnorm / reference
+                    "no convergence in {iterations} iterations (relative residual \
+                     {relative:.3e}){hint}"
                 )));
             }
         } else if current == 0.0 && dup.iter().all(|&d| d == 0.0) {

@@ -251,3 +251,27 @@ fn exhausted_cutbacks_are_reported() {
         "{msg}"
     );
 }
+
+/// A tolerance tighter than double precision stalls Newton at round-off; the failure says so and
+/// names the key to raise, instead of a bare iteration count.
+#[test]
+fn a_tolerance_below_round_off_is_named() {
+    for (key, quantity) in [
+        ("residual_tolerance", "residual"),
+        ("displacement_tolerance", "displacement"),
+    ] {
+        let step = format!("nlgeom = true\nmax_iterations = 8\nmax_cutbacks = 0\n{key} = 1e-17");
+        let an = beam(ElementKind::Hex8, [10, 2, 2], "neo_hooke", 0.3, 0.1, &step);
+        let e =
+            tricontact_fem::driver::run(&an, &mut tricontact_fem::assembly::NoExtra, &mut |_| {
+                Ok(())
+            })
+            .expect_err("cannot converge");
+        let msg = e.to_string();
+        assert!(
+            msg.contains(&format!("the {quantity} test stalled at round-off"))
+                && msg.contains(&format!("`{quantity}_tolerance` asks for more")),
+            "{msg}"
+        );
+    }
+}
