@@ -97,6 +97,11 @@ pub trait ExtraTerms: Send {
     fn after_converged(&mut self, _u: &[f64]) -> Result<bool, String> {
         Ok(true)
     }
+    /// After a singular tangent, before [`restore`](Self::restore): what in the last evaluated
+    /// state explains it, naming nodes, if the terms can tell (`dm` says which DOFs are free).
+    fn singular_cause(&self, _dm: &DofMap) -> Option<String> {
+        None
+    }
     /// The increment is accepted: the trial state becomes the committed one.
     fn commit(&mut self) {}
     /// The increment attempt failed: back to the committed state.

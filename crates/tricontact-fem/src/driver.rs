@@ -343,11 +343,13 @@ pub fn run(
                     control.converged();
                 }
                 Err(failure) => {
-                    extra.restore();
                     let hint = match (&failure, extra.num_extra() > 0) {
-                        (Failure::Singular(_), true) => MULTIPLIER_HINT,
-                        _ => "",
+                        (Failure::Singular(_), true) => extra
+                            .singular_cause(&dm)
+                            .map_or_else(|| MULTIPLIER_HINT.to_string(), |c| format!("; {c}")),
+                        _ => String::new(),
                     };
+                    extra.restore();
                     if let (Failure::Singular(m), false) = (&failure, step.nlgeom) {
                         return Err(FemError::Singular(format!(
                             "step '{}': {m}{hint}",

@@ -161,14 +161,15 @@ fn an_inactive_boundary_reports_no_reaction() {
 }
 
 /// Slave nodes prescribed along the normal leave multiplier constraints on the master nodes alone,
-/// which repeat each other: the singular tangent is reported with that likely cause.
+/// which repeat each other: the singular tangent is reported with that cause and the nodes.
 #[test]
-fn a_singular_multiplier_system_names_its_usual_cause() {
+fn a_singular_multiplier_system_names_its_cause_and_nodes() {
     let (_, mut an) = example("contact-block", "model.toml", None);
     let slaves = an.contacts[0].passes[0].slaves.clone();
+    let tags: Vec<u64> = slaves.iter().map(|&s| an.mesh.node_tags[s]).collect();
     an.boundaries.push(tricontact_fem::analysis::Boundary {
         name: "slaves".into(),
-        nodes: slaves,
+        nodes: slaves.clone(),
         values: [None, None, Some(0.01)],
         active: vec![true, false],
     });
@@ -176,9 +177,13 @@ fn a_singular_multiplier_system_names_its_usual_cause() {
     let mut terms = tricontact_fem::contact::ContactTerms::new(&an);
     let e = tricontact_fem::driver::run(&an, &mut terms, &mut |_| Ok(())).expect_err("singular");
     let msg = e.to_string();
+    let expected = format!(
+        "{} closed slave node(s) have every normal component prescribed (Gmsh nodes {}, ",
+        slaves.len(),
+        tags[0]
+    );
     assert!(
-        msg.contains("singular")
-            && msg.contains("slave nodes are prescribed along the contact normal"),
+        msg.contains("singular") && msg.contains(&expected) && msg.contains("method = \"penalty\""),
         "{msg}"
     );
 }

@@ -540,6 +540,48 @@ impl ExtraTerms for ContactTerms {
         Ok(done)
     }
 
+    /// Closed multiplier nodes whose normal lies entirely in prescribed components: their
+    /// constraint rows hold master DOFs only, and repeat each other where they share master nodes.
+    fn singular_cause(&self, dm: &crate::assembly::DofMap) -> Option<String> {
+        const LISTED: usize = 8;
+        let mut causes = Vec::new();
+        for (pair, states) in self.pairs.iter().zip(&self.trial) {
+            if pair.method != ContactMethod::Multiplier {
+                continue;
+            }
+            let fixed: Vec<u64> = pair.passes[0]
+                .slaves
+                .iter()
+                .zip(&states[0])
+                .filter(|&(&node, st)| {
+                    let free: f64 = (0..3)
+                        .filter(|&d| dm.eq[3 * node + d] != crate::assembly::NO_EQ)
+                        .map(|d| st.normal[d] * st.normal[d])
+                        .sum();
+                    st.active && free <= 1e-12
+                })
+                .map(|(&node, _)| self.node_tags[node])
+                .collect();
+            if fixed.is_empty() {
+                continue;
+            }
+            let shown: Vec<String> = fixed.iter().take(LISTED).map(u64::to_string).collect();
+            let more = match fixed.len().saturating_sub(LISTED) {
+                0 => String::new(),
+                n => format!(" and {n} more"),
+            };
+            causes.push(format!(
+                "contact '{}': {} closed slave node(s) have every normal component prescribed \
+                 (Gmsh nodes {}{more}), so their constraints act on the master nodes alone and \
+                 repeat each other: free those components or use method = \"penalty\"",
+                pair.name,
+                fixed.len(),
+                shown.join(", ")
+            ));
+        }
+        (!causes.is_empty()).then(|| causes.join("; "))
+    }
+
     fn commit(&mut self) {
         self.committed.clone_from(&self.trial);
         self.committed_force.clone_from(&self.trial_force);
