@@ -249,6 +249,16 @@ fn run(
         Ok(())
     });
     pb.finish_and_clear();
+    if let (Err(FemError::NotConverged { step, attempts, .. }), true) = (&summary, verbose) {
+        let number = an
+            .steps
+            .iter()
+            .position(|s| s.name == *step)
+            .map_or(0, |i| i + 1);
+        for (t, why) in attempts {
+            say!("step {number} '{step}' attempt t = {t:.4} failed: {why}");
+        }
+    }
     let summary = summary?;
     for line in record
         .contact_summary()

@@ -458,6 +458,56 @@ fn verbose_log_names_each_cut_back_attempt() {
     std::fs::remove_dir_all(&out).ok();
 }
 
+/// A run that fails after its cutbacks lists, with `--verbose`, every attempt of the increment
+/// that failed (the error line gives the last).
+#[test]
+fn verbose_log_lists_the_attempts_of_a_failed_increment() {
+    let out = temp_dir("failed-attempts");
+    let ex = examples_dir().join("cantilever");
+    let text = std::fs::read_to_string(ex.join("model.toml")).expect("model");
+    let text = text
+        .replace(
+            "residual_tolerance = 1e-9",
+            "residual_tolerance = 1e-16\nmax_cutbacks = 2",
+        )
+        .replace(
+            "file = \"beam.msh\"",
+            &format!("file = {:?}", ex.join("beam.msh").to_str().expect("utf8")),
+        );
+    let model = out.join("tight.toml");
+    std::fs::write(&model, text).expect("write");
+    let run = bin()
+        .args([
+            "run".as_ref(),
+            model.as_os_str(),
+            "--verbose".as_ref(),
+            "--output".as_ref(),
+            out.join("results").as_os_str(),
+        ])
+        .output()
+        .expect("runs");
+    assert_eq!(run.status.code(), Some(1));
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    let failed: Vec<&str> = stdout.lines().filter(|l| l.contains("failed:")).collect();
+    let targets: Vec<&str> = failed
+        .iter()
+        .filter_map(|l| l.split("t = ").nth(1)?.split(' ').next())
+        .collect();
+    assert_eq!(targets, ["0.2500", "0.1250", "0.0625"], "{stdout}");
+    assert!(
+        failed
+            .iter()
+            .all(|l| l.starts_with("step 1 'bend' attempt") && l.contains("stalled at round-off")),
+        "{failed:?}"
+    );
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        stderr.contains("to 0.062500") && stderr.contains("after 2 cutbacks"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&out).ok();
+}
+
 #[test]
 fn export_writes_a_calculix_deck_and_names_what_it_cannot() {
     let dir = temp_dir("export");

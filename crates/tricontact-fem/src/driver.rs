@@ -367,6 +367,7 @@ pub fn run(
                                 "{failure} (after {} cutbacks){hint}",
                                 step.max_cutbacks
                             ),
+                            attempts: std::mem::take(&mut attempts),
                         });
                     }
                 }

@@ -96,6 +96,9 @@ pub enum FemError {
         target: f64,
         /// Last failure reason.
         reason: String,
+        /// Every attempt of the failed increment: the load factor it aimed at and why it failed
+        /// (for a verbose log; the message gives the last).
+        attempts: Vec<(f64, String)>,
     },
     /// Writing results failed.
     #[error("output: {0}")]
