@@ -452,14 +452,22 @@ pub fn read_newton(dir: &Path) -> Result<Vec<NewtonLog>> {
             ))
         };
         let cols: Vec<&str> = line.split(',').collect();
-        let [step, inc, _, r] = cols.as_slice() else {
+        let [step, inc, iteration, r] = cols.as_slice() else {
             return Err(bad());
         };
         let step: usize = step.parse().map_err(|_| bad())?;
         let increment: usize = inc.parse().map_err(|_| bad())?;
+        let iteration: usize = iteration.parse().map_err(|_| bad())?;
         let r: f64 = r.parse().map_err(|_| bad())?;
+        // Iterations count 0, 1, … within an increment: a row out of sequence is not ours.
         match logs.last_mut() {
-            Some(l) if l.step + 1 == step && l.increment == increment => l.relative.push(r),
+            Some(l) if l.step + 1 == step && l.increment == increment => {
+                if iteration != l.relative.len() {
+                    return Err(bad());
+                }
+                l.relative.push(r);
+            }
+            _ if iteration != 0 => return Err(bad()),
             _ => logs.push(NewtonLog {
                 step: step.checked_sub(1).ok_or_else(bad)?,
                 increment,

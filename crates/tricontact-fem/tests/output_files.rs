@@ -265,3 +265,29 @@ fn nothing_to_plot_is_an_error() {
     assert!(!png.exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The iteration column must count 0, 1, … within each increment: a non-numeric or out-of-order
+/// value is a malformed row, named by line (it used to be skipped unread).
+#[test]
+fn newton_rows_out_of_sequence_are_malformed() {
+    for (tag, bad) in [
+        ("x", "1,1,x,1e-3"),
+        ("gap", "1,1,2,1e-3"),
+        ("start", "1,2,1,1e-3"),
+    ] {
+        let dir = newton_folder(&format!("plot-seq-{tag}"), &["1"]);
+        let file = dir.join("newton.csv");
+        let mut text = std::fs::read_to_string(&file).expect("csv");
+        text.push_str(bad);
+        text.push('\n');
+        std::fs::write(&file, text).expect("write");
+        let e = compare_newton(std::slice::from_ref(&dir), None, &dir.join("p.png"))
+            .expect_err("malformed")
+            .to_string();
+        assert!(
+            e.contains(&format!("{}:3: malformed row '{bad}'", file.display())),
+            "{e}"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
