@@ -219,3 +219,63 @@ fn a_line_search_spares_penalty_sliding_its_cutbacks() {
         "normal force {f_plain} against {f_searched}"
     );
 }
+
+/// Units are the user's: `contact-block` in metres and pascals (coordinates × 10⁻³, moduli × 10⁶,
+/// prescribed displacements × 10⁻³) gives the same forces in newtons, penetrations scaled by
+/// 10⁻³, and about the same Newton iterations (every tolerance is relative, every default penalty
+/// is built from the model's modulus and facet size).
+#[test]
+fn contact_block_in_other_units_gives_the_same_forces() {
+    let folder =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/contact-block");
+    let text = std::fs::read_to_string(folder.join("model.toml")).expect("model");
+    let mesh = tricontact_fem::gmsh::read_msh(&folder.join("blocks.msh")).expect("mesh");
+    let run = |text: &str, scale: f64| {
+        let model = tricontact_fem::model::Model::parse(text, &folder.join("model.toml"))
+            .expect("model text");
+        let mut mesh = mesh.clone();
+        for p in &mut mesh.nodes {
+            *p = p.map(|c| c * scale);
+        }
+        let an = tricontact_fem::analysis::Analysis::new(&model, mesh).expect("analysis");
+        let pair = an.contacts[0].name.clone();
+        let (summary, rows) = contact_history(&an);
+        let (_, last) = rows.last().expect("increments");
+        let penetration = rows
+            .iter()
+            .map(|(_, row)| column(row, &format!("{pair}_max_penetration")))
+            .fold(0.0, f64::max);
+        (
+            summary,
+            column(last, &format!("{pair}_normal_force")),
+            penetration,
+        )
+    };
+    let si = text
+        .replace("E = 1000.0", "E = 1.0e9")
+        .replace("E = 100.0", "E = 1.0e8")
+        .replace("z = -0.05 }", "z = -0.05e-3 }")
+        .replace("x = 0.3,", "x = 0.3e-3,");
+    assert_eq!(si.matches("e-3").count(), 3, "{si}");
+    let (mm, f_mm, pen_mm) = run(&text, 1.0);
+    let (m, f_m, pen_m) = run(&si, 1e-3);
+    println!(
+        "mm, MPa: {} iterations, force {f_mm}, penetration {pen_mm:e}; m, Pa: {} iterations, force {f_m}, penetration {pen_m:e}",
+        mm.iterations, m.iterations
+    );
+    assert_eq!((mm.cutbacks, m.cutbacks), (0, 0));
+    assert!(
+        (f_m - f_mm).abs() <= 1e-6 * f_mm,
+        "{f_mm} N against {f_m} N"
+    );
+    assert!(
+        pen_m <= 1e-3 * pen_mm.max(1e-9),
+        "{pen_mm} mm against {pen_m} m"
+    );
+    assert!(
+        m.iterations.abs_diff(mm.iterations) * 5 <= mm.iterations,
+        "{} against {} iterations",
+        mm.iterations,
+        m.iterations
+    );
+}
