@@ -232,7 +232,8 @@ pub fn external_forces(an: &Analysis, n_dofs: usize, s: usize, t: f64) -> Vec<f6
     f
 }
 
-/// Added to a singular-tangent failure of a model with multipliers: their usual cause.
+/// Added to a singular-tangent failure of a model with multipliers when [`ExtraTerms::singular_cause`]
+/// names no node: their usual cause.
 const MULTIPLIER_HINT: &str = "; with Lagrange multipliers this usually means slave nodes are prescribed along the contact normal, so their constraints act on the master nodes alone and repeat each other: free those components or use method = \"penalty\"";
 
 /// Most solves of one increment asked for by [`ExtraTerms::after_converged`].

@@ -25,6 +25,10 @@
 //! `contact-block` example with a penalty that inverted elements and cost two cutbacks; searching
 //! only the corrections cost none).
 //!
+//! Each trial is a full evaluation: contact statuses and facets are decided again at the trial
+//! point, and a status change there counts towards the node's switches (see
+//! [`crate::contact`]) even if the trial is then shortened.
+//!
 //! The multiplier method (a saddle point: `g(0)` has no sign) and follower pressures (no
 //! potential) iterate without it.
 

@@ -257,8 +257,7 @@ pub fn solve_increment(
             let du_total =
                 norm(u.iter().zip(u0).map(|(a, b)| a - b)).max(1e-3 * norm(u.iter().copied()));
             let residual_met = rnorm <= p.step.residual_tolerance * reference;
-            let correction = du_norm * ratio / du_total;
-            if residual_met && correction <= p.step.displacement_tolerance {
+            if residual_met && du_norm * ratio <= p.step.displacement_tolerance * du_total {
                 return Ok(Converged {
                     u,
                     residual: r,
@@ -277,6 +276,7 @@ pub fn solve_increment(
             }
             if iterations >= p.step.max_iterations {
                 let relative = rnorm / reference;
+                let correction = du_norm * ratio / du_total;
                 let hint = match (residual_met, relative, correction) {
                     (false, r, _) if r < ROUND_OFF => round_off_hint("residual", r),
                     (true, _, c) if c < ROUND_OFF => round_off_hint("displacement", c),
