@@ -14,6 +14,7 @@
 mod common;
 
 use common::{column, contact_history, example, last_column, run_example};
+use tricontact_fem::driver::RunSummary;
 use tricontact_fem::model::Extrapolation;
 
 const PAIR: &str = "upper_zmin-lower_zmax";
@@ -220,45 +221,55 @@ fn a_line_search_spares_penalty_sliding_its_cutbacks() {
     );
 }
 
+/// `contact-block` from its model text with the mesh scaled by `scale` and moved by `shift`
+/// (each coordinate): the run's summary, final normal force and largest penetration.
+fn contact_block_moved(text: &str, scale: f64, shift: f64) -> (RunSummary, f64, f64) {
+    let folder =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/contact-block");
+    let mut mesh = tricontact_fem::gmsh::read_msh(&folder.join("blocks.msh")).expect("mesh");
+    for p in &mut mesh.nodes {
+        *p = p.map(|c| c * scale + shift);
+    }
+    let model =
+        tricontact_fem::model::Model::parse(text, &folder.join("model.toml")).expect("model text");
+    let an = tricontact_fem::analysis::Analysis::new(&model, mesh).expect("analysis");
+    let pair = an.contacts[0].name.clone();
+    let (summary, rows) = contact_history(&an);
+    let (_, last) = rows.last().expect("increments");
+    let penetration = rows
+        .iter()
+        .map(|(_, row)| column(row, &format!("{pair}_max_penetration")))
+        .fold(0.0, f64::max);
+    (
+        summary,
+        column(last, &format!("{pair}_normal_force")),
+        penetration,
+    )
+}
+
+fn contact_block_text() -> String {
+    std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../examples/contact-block/model.toml"),
+    )
+    .expect("model")
+}
+
 /// Units are the user's: `contact-block` in metres and pascals (coordinates × 10⁻³, moduli × 10⁶,
 /// prescribed displacements × 10⁻³) gives the same forces in newtons, penetrations scaled by
 /// 10⁻³, and about the same Newton iterations (every tolerance is relative, every default penalty
 /// is built from the model's modulus and facet size).
 #[test]
 fn contact_block_in_other_units_gives_the_same_forces() {
-    let folder =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/contact-block");
-    let text = std::fs::read_to_string(folder.join("model.toml")).expect("model");
-    let mesh = tricontact_fem::gmsh::read_msh(&folder.join("blocks.msh")).expect("mesh");
-    let run = |text: &str, scale: f64| {
-        let model = tricontact_fem::model::Model::parse(text, &folder.join("model.toml"))
-            .expect("model text");
-        let mut mesh = mesh.clone();
-        for p in &mut mesh.nodes {
-            *p = p.map(|c| c * scale);
-        }
-        let an = tricontact_fem::analysis::Analysis::new(&model, mesh).expect("analysis");
-        let pair = an.contacts[0].name.clone();
-        let (summary, rows) = contact_history(&an);
-        let (_, last) = rows.last().expect("increments");
-        let penetration = rows
-            .iter()
-            .map(|(_, row)| column(row, &format!("{pair}_max_penetration")))
-            .fold(0.0, f64::max);
-        (
-            summary,
-            column(last, &format!("{pair}_normal_force")),
-            penetration,
-        )
-    };
+    let text = contact_block_text();
     let si = text
         .replace("E = 1000.0", "E = 1.0e9")
         .replace("E = 100.0", "E = 1.0e8")
         .replace("z = -0.05 }", "z = -0.05e-3 }")
         .replace("x = 0.3,", "x = 0.3e-3,");
     assert_eq!(si.matches("e-3").count(), 3, "{si}");
-    let (mm, f_mm, pen_mm) = run(&text, 1.0);
-    let (m, f_m, pen_m) = run(&si, 1e-3);
+    let (mm, f_mm, pen_mm) = contact_block_moved(&text, 1.0, 0.0);
+    let (m, f_m, pen_m) = contact_block_moved(&si, 1e-3, 0.0);
     println!(
         "mm, MPa: {} iterations, force {f_mm}, penetration {pen_mm:e}; m, Pa: {} iterations, force {f_m}, penetration {pen_m:e}",
         mm.iterations, m.iterations
@@ -277,5 +288,35 @@ fn contact_block_in_other_units_gives_the_same_forces() {
         "{} against {} iterations",
         mm.iterations,
         m.iterations
+    );
+}
+
+/// The origin is the user's too: `contact-block` pressed by 5·10⁻⁷ (strains of 10⁻⁷) converges the
+/// same with its mesh 1000 element sizes away from the origin. Gaps used to be formed from the
+/// current positions `X + u`, whose round-off `ε|X|` changes from iteration to iteration: the
+/// moved model stalled at a relative residual of about 10⁻⁸ and failed after five cutbacks.
+#[test]
+fn contact_block_far_from_the_origin_converges_as_at_it() {
+    let text = contact_block_text()
+        .replace("method = \"multiplier\"", "method = \"penalty\"")
+        .replace("z = -0.05 }", "z = -5e-7 }")
+        .replace("x = 0.3,", "x = 3e-6,");
+    assert_eq!(text.matches("e-7").count(), 2, "{text}");
+    let (here, f_here, _) = contact_block_moved(&text, 1.0, 0.0);
+    let (far, f_far, _) = contact_block_moved(&text, 1.0, 1000.0);
+    println!(
+        "at the origin: {} iterations, force {f_here}; 1000 away: {} iterations, force {f_far}",
+        here.iterations, far.iterations
+    );
+    assert_eq!((here.cutbacks, far.cutbacks), (0, 0));
+    assert!(
+        far.iterations <= here.iterations + 2,
+        "{} against {}",
+        far.iterations,
+        here.iterations
+    );
+    assert!(
+        (f_far - f_here).abs() <= 1e-6 * f_here,
+        "{f_here} against {f_far}"
     );
 }

@@ -1,7 +1,10 @@
 //! Frictionless node-to-facet contact in the solver: the `[[contact]]` pairs as [`ExtraTerms`].
 //!
 //! # Per evaluation (every Newton iteration)
-//! Positions are always current, `x = X + u` (small-strain solids included). For every pair and
+//! Positions are always current, `x = X + u` (small-strain solids included). The facet is chosen at
+//! `x`; the gap and its derivatives are then evaluated on `x_a − x_s = (X_a − X_s) + (u_a − u_s)`,
+//! centred on the slave node, so that their round-off does not grow with the distance from the
+//! origin. For every pair and
 //! pass, the master surface's tree is built at `x` and each slave node gets **one** constraint: the
 //! facet of [`tricontact::contact::choose_facet`] (among facets within the longest master edge the
 //! node projects into, smallest `|P|`, ties to the lowest index), or with `small_sliding` the facet,
@@ -163,8 +166,46 @@ impl ContactTerms {
             .collect()
     }
 
-    /// The gap of slave `j` of pass `q` of pair `p` at `x`, with the facet's nodes.
+    /// `x_a − x_s` formed as `(X_a − X_s) + (u_a − u_s)`: its round-off is that of the distance
+    /// between the nodes, not of their distance from the origin (`x_a − x_s` of the current
+    /// positions loses `ε|X|`, which varies from iteration to iteration and stalled Newton on
+    /// models far from the origin under small loads).
+    fn relative(&self, u: &[f64], a: usize, s: usize) -> Vec3 {
+        let (xa, xs) = (self.reference[a], self.reference[s]);
+        Vec3::new(
+            (xa[0] - xs[0]) + (u[3 * a] - u[3 * s]),
+            (xa[1] - xs[1]) + (u[3 * a + 1] - u[3 * s + 1]),
+            (xa[2] - xs[2]) + (u[3 * a + 2] - u[3 * s + 2]),
+        )
+    }
+
+    /// The gap of slave `j` of pass `q` of pair `p` at `x` (`u`), with the facet's nodes: the facet
+    /// is chosen at the current positions `x`, and the gap that enters the terms is built in
+    /// coordinates centred on the slave node ([`Self::relative`]; every term is invariant under
+    /// translation).
     fn evaluate(
+        &self,
+        (p, q, j): (usize, usize, usize),
+        x: &[Vec3],
+        u: &[f64],
+        bvh: Option<&Bvh>,
+    ) -> Option<(u32, [usize; 3], Gap)> {
+        let s = self.pairs[p].passes[q].slaves[j];
+        let (f, nodes, gap) = self.choose(p, q, j, x, bvh)?;
+        let local = nodes.map(|a| self.relative(u, a, s));
+        let gap = match gap {
+            Gap::Finite(pair) => Gap::Finite(
+                tricontact::NodeFacet::new(local[0], local[1], local[2], Vec3::zeros())
+                    .unwrap_or(pair),
+            ),
+            Gap::Linear { shape, normal, .. } => Gap::linear(local, Vec3::zeros(), shape, normal),
+        };
+        Some((f, nodes, gap))
+    }
+
+    /// The facet of slave `j` of pass `q` of pair `p` at `x`, its nodes, and the gap there in
+    /// global coordinates.
+    fn choose(
         &self,
         p: usize,
         q: usize,
@@ -335,10 +376,12 @@ impl ExtraTerms for ContactTerms {
                 let pass = &self.pairs[p].passes[q];
                 let bvh = Bvh::build(&pass.surface, &x, pass.radius).map_err(|e| e.to_string())?;
                 for j in 0..pass.slaves.len() {
-                    let start = self.evaluate(p, q, j, &x, Some(&bvh)).map(|(f, _, g)| {
-                        let w = g.normal();
-                        (f, g.shape(), [w[0], w[1], w[2]])
-                    });
+                    let start = self
+                        .evaluate((p, q, j), &x, u, Some(&bvh))
+                        .map(|(f, _, g)| {
+                            let w = g.normal();
+                            (f, g.shape(), [w[0], w[1], w[2]])
+                        });
                     self.trial[p][q][j].start = start;
                 }
             }
@@ -371,7 +414,7 @@ impl ExtraTerms for ContactTerms {
                 };
                 for j in 0..self.pairs[p].passes[q].slaves.len() {
                     let s = self.pairs[p].passes[q].slaves[j];
-                    let eval = self.evaluate(p, q, j, &x, bvh.as_ref());
+                    let eval = self.evaluate((p, q, j), &x, u, bvh.as_ref());
                     let st = &mut self.trial[p][q][j];
                     let was_active = st.active;
                     if eval.as_ref().map(|e| e.0) != st.facet {
