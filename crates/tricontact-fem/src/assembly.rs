@@ -48,6 +48,12 @@ pub trait ExtraTerms: Send {
     fn extra_nodes(&self) -> Vec<Option<usize>> {
         Vec::new()
     }
+    /// For each extra unknown, the factor that makes its equation's residual a force (a gap
+    /// constraint: a stiffness) and, inverted, its correction a length: the weights of the
+    /// convergence norms, so that they do not depend on the model's units. By default 1.
+    fn residual_scales(&self) -> Vec<f64> {
+        vec![1.0; self.num_extra()]
+    }
     /// Whether the added tangent is symmetric (keeps Cholesky or `LDLᵀ` usable).
     fn symmetric(&self) -> bool {
         true

@@ -18,6 +18,13 @@
 //!   of the next one (so a linear problem converges after one solve); the
 //!   floor `10⁻³‖u‖` keeps increments that change nothing from stalling.
 //!
+//! Norms are weighted so that every entry is a force (residuals) or a length (corrections): an
+//! extra unknown's equation counts `κ` times its residual and `1/κ` times its correction, `κ`
+//! from [`ExtraTerms::residual_scales`] (for a contact multiplier the pair's penalty factor `α`:
+//! `αP` is a force, `δλ/α` a length). The linear system is solved in the same scaled variables
+//! (rows and columns of the extra unknowns times `κ`), so that its blocks share one scale. Norms
+//! are computed without overflow or underflow of the squares.
+//!
 //! With `[[step]] line_search = true`, each correction after the predictor of a potential problem
 //! (no multipliers, no follower pressure) may be shortened by [`crate::line_search`] before the
 //! next iteration.
@@ -89,8 +96,53 @@ fn round_off_hint(quantity: &str, value: f64) -> String {
     )
 }
 
-fn norm(v: impl Iterator<Item = f64>) -> f64 {
-    v.map(|x| x * x).sum::<f64>().sqrt()
+/// Euclidean norm, without overflow or underflow of the squares: entries of 10⁻¹⁷⁰ (or 10¹⁶⁰)
+/// would otherwise give a norm of 0 (or ∞) and a wrong convergence decision.
+fn norm(v: impl Iterator<Item = f64> + Clone) -> f64 {
+    let sum: f64 = v.clone().map(|x| x * x).sum();
+    if sum.is_normal() && sum < 1e300 && sum > 1e-300 {
+        return sum.sqrt();
+    }
+    let scale = v.clone().fold(0.0f64, |m, x| m.max(x.abs()));
+    if scale == 0.0 || !scale.is_finite() {
+        return if sum.is_nan() { f64::NAN } else { scale };
+    }
+    scale * v.map(|x| (x / scale).powi(2)).sum::<f64>().sqrt()
+}
+
+/// Norm of `v` weighted entry by entry by `w`.
+fn weighted(v: &[f64], w: &[f64]) -> f64 {
+    norm(v.iter().zip(w).map(|(a, b)| a * b))
+}
+
+/// Weights of the convergence norms ([`ExtraTerms::residual_scales`]): per equation for residuals
+/// and corrections, per global DOF for displacements. The residual weights also scale the linear
+/// system symmetrically (rows and columns of the extra unknowns).
+struct Weights {
+    residual: Vec<f64>,
+    correction: Vec<f64>,
+    dof: Vec<f64>,
+}
+
+impl Weights {
+    fn new(dm: &DofMap, scales: &[f64]) -> Self {
+        let mut w = Self {
+            residual: vec![1.0; dm.n_eq],
+            correction: vec![1.0; dm.n_eq],
+            dof: vec![1.0; dm.eq.len()],
+        };
+        for (k, &kappa) in scales.iter().enumerate() {
+            let dof = dm.n_nodal + k;
+            if dof < dm.eq.len() && kappa > 0.0 && kappa.is_finite() {
+                w.dof[dof] = 1.0 / kappa;
+                if dm.eq[dof] != NO_EQ {
+                    w.residual[dm.eq[dof]] = kappa;
+                    w.correction[dm.eq[dof]] = 1.0 / kappa;
+                }
+            }
+        }
+        w
+    }
 }
 
 /// Inputs fixed during an increment.
@@ -143,10 +195,13 @@ pub fn solve_increment(
             .map(|d| p.fext[d]),
     );
     let inverted = |e: usize| Failure::Inverted(an.mesh.elements[an.body[e].element].tag);
+    let weights = Weights::new(dm, &extra.residual_scales());
 
     let mut residuals = Vec::new();
     let mut reference = fext_norm;
     let mut du_norm = 0.0;
+    // The weighted norm of the last correction in full (a line search applies a fraction of it).
+    let mut full_norm = 0.0;
     let mut method = "none";
     let mut iterations = 0usize;
     let mut predictor = true;
@@ -183,7 +238,7 @@ pub fn solve_increment(
                 if let Some(ls) = search.as_mut()
                     && let Some(s) = ls.next(None)
                 {
-                    du_norm = ls.move_to(s, &mut u, dm);
+                    du_norm = ls.move_to(s, &mut u, dm) * full_norm;
                     line_searches += 1;
                     continue;
                 }
@@ -223,18 +278,18 @@ pub fn solve_increment(
                 rhs[e] = -r[dof];
             }
         }
-        let rnorm = norm(rhs.iter().copied());
+        let rnorm = weighted(&rhs, &weights.residual);
         if predictor {
             for (b, q) in rhs.iter_mut().zip(&asm.predictor) {
                 *b += q;
             }
         }
         let react = norm((0..dm.n_nodal).filter(|&d| dm.eq[d] == NO_EQ).map(|d| r[d]));
-        let current = norm(rhs.iter().copied());
+        let current = weighted(&rhs, &weights.residual);
         if let Some(ls) = search.as_mut()
             && let Some(s) = ls.next(Some(ls.slope(&rhs)).filter(|g| g.is_finite()))
         {
-            du_norm = ls.move_to(s, &mut u, dm);
+            du_norm = ls.move_to(s, &mut u, dm) * full_norm;
             line_searches += 1;
             continue;
         }
@@ -254,8 +309,9 @@ pub fn solve_increment(
             } else {
                 0.0
             };
-            let du_total =
-                norm(u.iter().zip(u0).map(|(a, b)| a - b)).max(1e-3 * norm(u.iter().copied()));
+            let w = &weights.dof;
+            let du_total = norm(u.iter().zip(u0).zip(w).map(|((a, b), w)| (a - b) * w))
+                .max(1e-3 * weighted(&u, w));
             let residual_met = rnorm <= p.step.residual_tolerance * reference;
             if residual_met && du_norm * ratio <= p.step.displacement_tolerance * du_total {
                 return Ok(Converged {
@@ -303,6 +359,13 @@ pub fn solve_increment(
             solver.reset();
         }
         if need_tangent {
+            // Extra unknowns in scaled variables (multipliers `λ = κ μ`, constraint rows × κ): the
+            // tangent's blocks then share one scale whatever the model's units, which keeps the
+            // factorization (and its `LDLᵀ` acceptance test) independent of them.
+            let w = &weights.residual;
+            for t in &mut asm.extra {
+                t.val *= w[t.row] * w[t.col];
+            }
             let k = asm.matrix(p.pat);
             let factor = solver
                 .factor(k.as_ref(), structure)
@@ -311,7 +374,15 @@ pub fn solve_increment(
         }
         let factor = solver.cached.as_ref().expect("factored above");
         method = factor.method();
-        let du = factor.solve(&rhs);
+        let scaled: Vec<f64> = rhs
+            .iter()
+            .zip(&weights.residual)
+            .map(|(r, w)| r * w)
+            .collect();
+        let mut du = factor.solve(&scaled);
+        for (d, w) in du.iter_mut().zip(&weights.residual) {
+            *d *= w;
+        }
         if !constant_tangent {
             solver.cached = None;
         }
@@ -323,7 +394,8 @@ pub fn solve_increment(
                 u[dof] += du[e];
             }
         }
-        du_norm = norm(du.iter().copied());
+        full_norm = weighted(&du, &weights.correction);
+        du_norm = full_norm;
         if searching && !predictor {
             search = Some(LineSearch::new(du, &rhs));
         }

@@ -583,6 +583,21 @@ impl ExtraTerms for ContactTerms {
         Ok(done)
     }
 
+    /// Each multiplier's constraint `c = P` (a length) weighs in the convergence norms as `αP`, a
+    /// force, with the pair's penalty factor `α`, and its correction `δλ` (a force) as `δλ/α`.
+    fn residual_scales(&self) -> Vec<f64> {
+        let mut scales = Vec::with_capacity(self.n_extra);
+        for pair in &self.pairs {
+            if pair.method == ContactMethod::Multiplier {
+                scales.extend(std::iter::repeat_n(
+                    pair.penalty,
+                    pair.passes[0].slaves.len(),
+                ));
+            }
+        }
+        scales
+    }
+
     /// Closed multiplier nodes whose normal lies entirely in prescribed components: their
     /// constraint rows hold master DOFs only, and repeat each other where they share master nodes.
     fn singular_cause(&self, dm: &crate::assembly::DofMap) -> Option<String> {
