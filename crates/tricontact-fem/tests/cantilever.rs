@@ -47,7 +47,7 @@ group = "xmin"
 fix = ["x", "y", "z"]
 [[load]]
 group = "xmax"
-force = [0.0, {}, 0.0]
+force = [0.0, {:e}, 0.0]
 [[step]]
 {step}
 "#,
@@ -273,5 +273,31 @@ fn a_tolerance_below_round_off_is_named() {
                 && msg.contains(&format!("`{quantity}_tolerance` asks for more")),
             "{msg}"
         );
+    }
+}
+
+/// Loads of 10⁻¹⁷⁰ or 10²⁰⁰ (whose squares underflow or overflow): the residual norms are taken
+/// without squaring them raw, so the run still solves and the reactions balance the load (a load
+/// of 10⁻¹⁷⁰ used to end with zero displacement, and 10²⁰⁰ with a "non-finite residual").
+#[test]
+fn extreme_load_magnitudes_still_solve() {
+    for force in [1e-170, 1e200] {
+        let an = beam(
+            ElementKind::Hex8,
+            [10, 2, 2],
+            "linear_elastic",
+            0.3,
+            force,
+            "nlgeom = false",
+        );
+        let (_, rec) = common::solve(&an);
+        let last = rec.last().expect("converged");
+        assert!(last.iterations >= 1, "{force}: no iteration");
+        let reaction = last.reactions[0][1];
+        assert!(
+            (reaction - force).abs() <= 1e-8 * force,
+            "{force}: reaction {reaction}"
+        );
+        assert!(tip_deflection(&an, &last.u) > 0.0, "{force}: no deflection");
     }
 }
