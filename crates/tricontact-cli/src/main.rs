@@ -15,6 +15,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use tricontact_fem::analysis::Analysis;
 use tricontact_fem::contact::ContactTerms;
 use tricontact_fem::driver::{self, IncrementInfo};
+use tricontact_fem::error::load_factor_text;
 use tricontact_fem::hertz::HertzSetup;
 use tricontact_fem::model::Model;
 use tricontact_fem::output::ResultWriter;
@@ -159,7 +160,8 @@ fn set_threads(threads: Option<usize>) -> Result<(), String> {
         .map_err(|e| format!("cannot start {n} threads: {e}"))
 }
 
-fn increment_line(info: &IncrementInfo<'_>) -> String {
+/// `info`'s line of the verbose log; `previous` is the load factor the increment started from.
+fn increment_line(info: &IncrementInfo<'_>, previous: f64) -> String {
     let rel: Vec<String> = info
         .relative_residuals()
         .iter()
@@ -170,11 +172,11 @@ fn increment_line(info: &IncrementInfo<'_>) -> String {
         n => format!(" ({n} line-search trials)"),
     };
     format!(
-        "step {} '{}' inc {:>3}  t = {:.4}  iters {:>2}{searches}  cutbacks {}  {}  rel. residuals [{}]",
+        "step {} '{}' inc {:>3}  t = {}  iters {:>2}{searches}  cutbacks {}  {}  rel. residuals [{}]",
         info.step + 1,
         info.step_name,
         info.increment,
-        info.load_factor,
+        load_factor_text(info.load_factor, info.load_factor - previous, 4),
         info.iterations,
         info.cutbacks,
         info.method,
@@ -214,6 +216,8 @@ fn run(
         }
     }
     let mut contact = ContactTerms::new(&an);
+    // (step, load factor) of the last converged increment, for the verbose log.
+    let mut last = (usize::MAX, 0.0);
     let summary = driver::run(&an, &mut contact, &mut |info| {
         writer.write(&an, info)?;
         record.record(&an, info);
@@ -222,19 +226,23 @@ fn run(
         }
         pb.set_position((info.time * 1000.0).round() as u64);
         pb.set_message(format!("step {} t={:.3}", info.step + 1, info.load_factor));
+        // The load factor this increment started from (0 at a step's first).
+        let previous = if info.step == last.0 { last.1 } else { 0.0 };
+        last = (info.step, info.load_factor);
         if verbose {
             let mut lines: Vec<String> = info
                 .attempts
                 .iter()
-                .map(|(t, why)| {
+                .map(|&(t, ref why)| {
                     format!(
-                        "step {} '{}' attempt t = {t:.4} cut back: {why}",
+                        "step {} '{}' attempt t = {} cut back: {why}",
                         info.step + 1,
-                        info.step_name
+                        info.step_name,
+                        load_factor_text(t, t - previous, 4)
                     )
                 })
                 .collect();
-            lines.push(increment_line(info));
+            lines.push(increment_line(info, previous));
             for (k, note) in info.notes.iter().enumerate() {
                 lines.push(format!("    iteration {k}: {note}"));
             }
@@ -249,14 +257,24 @@ fn run(
         Ok(())
     });
     pb.finish_and_clear();
-    if let (Err(FemError::NotConverged { step, attempts, .. }), true) = (&summary, verbose) {
+    if let (
+        Err(FemError::NotConverged {
+            step,
+            attempts,
+            load_factor,
+            ..
+        }),
+        true,
+    ) = (&summary, verbose)
+    {
         let number = an
             .steps
             .iter()
             .position(|s| s.name == *step)
             .map_or(0, |i| i + 1);
         for (t, why) in attempts {
-            say!("step {number} '{step}' attempt t = {t:.4} failed: {why}");
+            let t = load_factor_text(*t, t - load_factor, 4);
+            say!("step {number} '{step}' attempt t = {t} failed: {why}");
         }
     }
     let summary = summary?;

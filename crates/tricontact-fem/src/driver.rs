@@ -10,8 +10,9 @@
 //!
 //! Increment control: start with `Δt = 1/increments`; on a [`Failure`] the
 //! state is restored to the last converged increment and `Δt` is halved (at
-//! most `max_cutbacks` times in a row); after two converged increments in a
-//! row `Δt` doubles back, up to its initial value. State (`u` and the state
+//! most `max_cutbacks` times in a row, and never below `Δt₀/2^max_cutbacks`);
+//! after two converged increments in a row `Δt` doubles back, up to its
+//! initial value. State (`u` and the state
 //! of the [`ExtraTerms`]) is committed only at converged increments and
 //! restored on a cutback. When the extra terms ask for another solve after
 //! Newton converged (an Uzawa update), the increment is solved again from the
@@ -153,13 +154,38 @@ impl IncrementControl {
     }
 
     /// Records a failed attempt: halves `dt`; `false` when the cutbacks of
-    /// this increment are exhausted.
+    /// this increment are exhausted or `dt` would fall below the smallest increment,
+    /// `dt0 / 2^max_cutbacks` (a step that keeps failing after converged half-increments
+    /// otherwise creeps on with ever smaller ones).
     #[must_use]
     pub fn failed(&mut self) -> bool {
         self.cutbacks_here += 1;
         self.streak = 0;
         self.dt /= 2.0;
-        self.cutbacks_here <= self.max_cutbacks
+        self.cutbacks_here <= self.max_cutbacks && self.dt >= self.smallest()
+    }
+
+    /// The smallest increment allowed, `dt0 / 2^max_cutbacks`.
+    #[must_use]
+    pub fn smallest(&self) -> f64 {
+        let halvings = i32::try_from(self.max_cutbacks).unwrap_or(i32::MAX);
+        self.dt0 * 0.5f64.powi(halvings)
+    }
+
+    /// Why [`IncrementControl::failed`] gave up, for the error message.
+    #[must_use]
+    pub fn exhausted(&self) -> String {
+        let n = self.max_cutbacks;
+        if self.cutbacks_here > n {
+            format!("after {n} cutback{}", if n == 1 { "" } else { "s" })
+        } else {
+            let k = self.cutbacks_here - 1;
+            format!(
+                "after {k} cutback{}, at the smallest increment max_cutbacks = {n} allows: 1/2^{n} \
+                 of the initial one",
+                if k == 1 { "" } else { "s" }
+            )
+        }
     }
 }
 
@@ -364,10 +390,8 @@ pub fn run(
                             step: step.name.clone(),
                             load_factor: t,
                             target: t_new,
-                            reason: format!(
-                                "{failure} (after {} cutbacks){hint}",
-                                step.max_cutbacks
-                            ),
+                            reason: format!("{failure}{hint}"),
+                            exhausted: control.exhausted(),
                             attempts: std::mem::take(&mut attempts),
                         });
                     }
@@ -436,6 +460,22 @@ mod tests {
         assert!(c.failed());
         assert!((c.dt - 0.0625).abs() < 1e-15);
         assert!(!c.failed(), "third cutback exceeds max_cutbacks = 2");
+        assert_eq!(c.exhausted(), "after 2 cutbacks");
+        // Converged half-increments do not let the increment shrink below dt0 / 2^2.
+        let mut c = IncrementControl::new(4, 2);
+        assert!(c.failed() && c.failed());
+        c.converged();
+        assert!(
+            !c.failed(),
+            "1/16 is below the smallest increment, 1/4 / 2^2"
+        );
+        assert!(
+            c.exhausted()
+                == "after 0 cutbacks, at the smallest increment max_cutbacks = 2 allows: 1/2^2 of \
+                    the initial one",
+            "{}",
+            c.exhausted()
+        );
         let mut c = IncrementControl::new(4, 2);
         assert!(c.failed() && c.failed());
         c.converged();

@@ -85,7 +85,9 @@ pub enum FemError {
     Singular(String),
     /// The analysis did not converge even after the allowed cutbacks.
     #[error(
-        "step '{step}' did not converge from load factor {load_factor:.6} to {target:.6}: {reason}"
+        "step '{step}' did not converge from load factor {} to {} ({exhausted}): {reason}",
+        load_factor_text(*.load_factor, *.target - *.load_factor, 6),
+        load_factor_text(*.target, *.target - *.load_factor, 6)
     )]
     NotConverged {
         /// Step name.
@@ -96,6 +98,8 @@ pub enum FemError {
         target: f64,
         /// Last failure reason.
         reason: String,
+        /// How the cutbacks ran out (their number, or the smallest increment reached).
+        exhausted: String,
         /// Every attempt of the failed increment: the load factor it aimed at and why it failed
         /// (for a verbose log; the message gives the last).
         attempts: Vec<(f64, String)>,
@@ -139,4 +143,23 @@ impl FemError {
             )),
         }
     }
+}
+
+/// A load factor `t` printed with at least `min_decimals` decimals and enough more to show an
+/// increment `dt` with two significant digits (deep cutbacks otherwise print the same `t` for
+/// different increments).
+#[must_use]
+pub fn load_factor_text(t: f64, dt: f64, min_decimals: usize) -> String {
+    let needed = if dt.abs() > 0.0 && dt.is_finite() {
+        // Decimals up to dt's leading digit, plus one more.
+        let lead = -dt.abs().log10().floor();
+        if lead.is_finite() && lead > 0.0 {
+            lead as usize + 1
+        } else {
+            0
+        }
+    } else {
+        0
+    };
+    format!("{t:.*}", needed.clamp(min_decimals, 17))
 }

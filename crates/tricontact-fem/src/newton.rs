@@ -338,9 +338,20 @@ pub fn solve_increment(
                     (true, _, c) if c < ROUND_OFF => round_off_hint("displacement", c),
                     _ => String::new(),
                 };
+                let unmet = if residual_met {
+                    format!(
+                        "relative residual {relative:.3e} met, estimated correction \
+                         {correction:.3e} > displacement_tolerance {:e}",
+                        p.step.displacement_tolerance
+                    )
+                } else {
+                    format!(
+                        "relative residual {relative:.3e} > residual_tolerance {:e}",
+                        p.step.residual_tolerance
+                    )
+                };
                 return Err(Failure::Diverged(format!(
-                    "no convergence in {iterations} iterations (relative residual \
-                     {relative:.3e}){hint}"
+                    "no convergence in {iterations} iterations ({unmet}){hint}"
                 )));
             }
         } else if current == 0.0 && dup.iter().all(|&d| d == 0.0) {

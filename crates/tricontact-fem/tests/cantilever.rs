@@ -244,7 +244,7 @@ fn exhausted_cutbacks_are_reported() {
         matches!(e, tricontact_fem::FemError::NotConverged { .. }),
         "{msg}"
     );
-    assert!(msg.contains("after 1 cutbacks"), "{msg}");
+    assert!(msg.contains("(after 1 cutback): "), "{msg}");
     // One increment, halved once: the last attempt aimed at half the step.
     assert!(
         msg.contains("from load factor 0.000000 to 0.500000"),
