@@ -163,3 +163,21 @@ pub fn load_factor_text(t: f64, dt: f64, min_decimals: usize) -> String {
     };
     format!("{t:.*}", needed.clamp(min_decimals, 17))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::load_factor_text;
+
+    #[test]
+    fn load_factors_show_their_increment() {
+        assert_eq!(load_factor_text(0.5, 0.25, 4), "0.5000");
+        assert_eq!(load_factor_text(0.5, 0.0, 6), "0.500000");
+        // Two increments 2⁻²⁰ apart print differently.
+        let dt = 0.5f64.powi(20);
+        let (a, b) = (0.440_970_443, 0.440_970_443 + dt);
+        assert_ne!(load_factor_text(a, dt, 4), load_factor_text(b, dt, 4));
+        // dt ≈ 9.5e-7: its leading digit is the 7th decimal, one more is shown.
+        assert_eq!(load_factor_text(b, dt, 4).len(), "0.".len() + 8);
+        assert_eq!(load_factor_text(1.0, f64::NAN, 4), "1.0000");
+    }
+}
