@@ -52,8 +52,17 @@ pub fn parse_physical_names(bytes: &[u8], path: &Path) -> Result<HashMap<(i32, i
         .next()
         .and_then(|l| l.parse().ok())
         .ok_or_else(|| bad("<count>"))?;
-    for _ in 0..count {
-        let line = lines.next().ok_or_else(|| bad("<missing>"))?;
+    let mut by_name: HashMap<(i32, String), i32> = HashMap::new();
+    let mesh_error = |message: String| FemError::Mesh {
+        path: path.to_path_buf(),
+        message,
+    };
+    for k in 0..count {
+        let line = lines.next().ok_or_else(|| {
+            mesh_error(format!(
+                "$PhysicalNames announces {count} names but lists {k}"
+            ))
+        })?;
         let mut it = line.splitn(3, char::is_whitespace);
         let dim: i32 = it
             .next()
@@ -64,7 +73,22 @@ pub fn parse_physical_names(bytes: &[u8], path: &Path) -> Result<HashMap<(i32, i
             .and_then(|s| s.parse().ok())
             .ok_or_else(|| bad(line))?;
         let name = it.next().ok_or_else(|| bad(line))?.trim().trim_matches('"');
-        names.insert((dim, tag), name.to_string());
+        if let Some(other) = by_name.insert((dim, name.to_string()), tag) {
+            return Err(mesh_error(format!(
+                "physical name '{name}' is given to two {dim}D groups (tags {other} and {tag}); \
+                 a name must be unique within a dimension"
+            )));
+        }
+        if names.insert((dim, tag), name.to_string()).is_some() {
+            return Err(mesh_error(format!(
+                "the {dim}D physical group {tag} is named twice in $PhysicalNames"
+            )));
+        }
+    }
+    if let Some(extra) = lines.next() {
+        return Err(mesh_error(format!(
+            "$PhysicalNames announces {count} names but lists more (first extra line '{extra}')"
+        )));
     }
     Ok(names)
 }

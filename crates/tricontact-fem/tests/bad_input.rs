@@ -282,3 +282,31 @@ fn a_name_used_in_two_dimensions_is_resolved_by_need_or_reported() {
         "{msg}"
     );
 }
+
+/// `$PhysicalNames` that Gmsh would not write: one name for two groups of a dimension (a
+/// reference to it would silently take the first), a group named twice, or a count that does not
+/// match the lines. Each is an error naming the file and what is wrong.
+#[test]
+fn inconsistent_physical_names_are_rejected() {
+    let cases = [
+        (
+            "$PhysicalNames\n3\n2 2 \"base\"\n2 3 \"base\"\n",
+            "physical name 'base' is given to two 2D groups (tags 2 and 3)",
+        ),
+        (
+            "$PhysicalNames\n3\n2 2 \"base\"\n2 2 \"top\"\n",
+            "the 2D physical group 2 is named twice",
+        ),
+        ("$PhysicalNames\n3\n", "announces 3 names but lists 2"),
+        ("$PhysicalNames\n1\n", "announces 1 names but lists more"),
+    ];
+    for (k, (header, expected)) in cases.into_iter().enumerate() {
+        let mesh = msh(4, &TET).replacen("$PhysicalNames\n2\n", header, 1);
+        let p = setup(&format!("names-{k}"), &mesh, &model_text("solid", ""));
+        let msg = load_analysis(&p).expect_err("bad names").to_string();
+        assert!(
+            msg.contains(expected) && msg.contains("m.msh"),
+            "{header:?}: {msg}"
+        );
+    }
+}
