@@ -103,6 +103,11 @@ pub trait ExtraTerms: Send {
     fn after_converged(&mut self, _u: &[f64]) -> Result<bool, String> {
         Ok(true)
     }
+    /// Why the last [`after_converged`](Self::after_converged) asked for another solve (for the
+    /// message when the outer loop gives up), if the terms can tell.
+    fn outer_note(&self) -> Option<String> {
+        None
+    }
     /// After a singular tangent, before [`restore`](Self::restore): what in the last evaluated
     /// state explains it, naming nodes, if the terms can tell (`dm` says which DOFs are free).
     fn singular_cause(&self, _dm: &DofMap) -> Option<String> {

@@ -425,8 +425,11 @@ fn solve_with_outer(
     while !extra.after_converged(&c.u).map_err(Failure::Diverged)? {
         outer += 1;
         if outer > MAX_OUTER {
+            let why = extra
+                .outer_note()
+                .map_or_else(String::new, |n| format!(": {n}"));
             return Err(Failure::Diverged(format!(
-                "outer (Uzawa) loop not converged in {MAX_OUTER} solves"
+                "outer (Uzawa) loop not converged in {MAX_OUTER} solves{why}"
             )));
         }
         let next = solve_increment(problem, extra, u0, &c.u, solver)?;

@@ -337,3 +337,22 @@ fn contact_block_far_from_the_origin_converges_as_at_it() {
         "{f_here} against {f_far}"
     );
 }
+
+/// An augmented-Lagrangian tolerance below what the Uzawa updates can reach: the failure names
+/// the pair, the penetration reached and the key to raise.
+#[test]
+fn an_unreachable_augmented_tolerance_is_named() {
+    let (_, mut an) = example("patch", "augmented.toml", Some("matching-hex.msh"));
+    an.contacts[0].tolerance = 1e-300;
+    an.steps[0].max_cutbacks = 0;
+    let mut terms = tricontact_fem::contact::ContactTerms::new(&an);
+    let e = tricontact_fem::driver::run(&an, &mut terms, &mut |_| Ok(())).expect_err("unreachable");
+    let msg = e.to_string();
+    let pair = &an.contacts[0].name;
+    assert!(
+        msg.contains("outer (Uzawa) loop not converged in 50 solves")
+            && msg.contains(&format!("contact '{pair}': largest penetration "))
+            && msg.contains("raise its `tolerance`"),
+        "{msg}"
+    );
+}

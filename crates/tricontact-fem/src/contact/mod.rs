@@ -92,6 +92,8 @@ pub struct ContactTerms {
     trial_force: Vec<f64>,
     areas: Vec<f64>,
     note: Option<String>,
+    /// Why the last Uzawa check asked for another solve.
+    outer: Option<String>,
 }
 
 impl ContactTerms {
@@ -137,6 +139,7 @@ impl ContactTerms {
             trial_force: vec![0.0; 3 * n],
             areas,
             note: None,
+            outer: None,
         }
     }
 
@@ -564,6 +567,7 @@ impl ExtraTerms for ContactTerms {
     fn after_converged(&mut self, _u: &[f64]) -> Result<bool, String> {
         self.check_held_nodes()?;
         let mut done = true;
+        self.outer = None;
         for (p, pair) in self.pairs.iter().enumerate() {
             if pair.method != ContactMethod::Augmented {
                 continue;
@@ -575,12 +579,21 @@ impl ExtraTerms for ContactTerms {
                 .fold(0.0f64, |m, s| m.max(-s.gap));
             if largest > pair.tolerance {
                 done = false;
+                self.outer = Some(format!(
+                    "contact '{}': largest penetration {largest:.3e} still above tolerance × h = \
+                     {:.3e}; raise its `tolerance`",
+                    pair.name, pair.tolerance
+                ));
                 for st in self.trial[p].iter_mut().flatten() {
                     st.lambda_k = if st.active { st.lambda.min(0.0) } else { 0.0 };
                 }
             }
         }
         Ok(done)
+    }
+
+    fn outer_note(&self) -> Option<String> {
+        self.outer.clone()
     }
 
     /// Each multiplier's constraint `c = P` (a length) weighs in the convergence norms as `αP`, a
