@@ -193,6 +193,9 @@ fn run(
     let model = Model::load_with_mesh(model_path, mesh_override.as_deref())?;
     let mesh = gmsh::read_msh(&model.mesh_path())?;
     let an = Analysis::new(&model, mesh)?;
+    for note in an.notes() {
+        say!("note: {note}");
+    }
     let hertz = model
         .hertz
         .as_ref()
@@ -431,6 +434,9 @@ fn check(model_path: &Path, mesh_override: Option<PathBuf>) -> Result<(), FemErr
                 an.steps[s].name
             )));
         }
+    }
+    for note in an.notes() {
+        say!("note: {note}");
     }
     if problems.is_empty() {
         say!("no problems found");

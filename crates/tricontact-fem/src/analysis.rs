@@ -140,6 +140,46 @@ impl Analysis {
             .map_or(&[], |(_, r)| r.as_slice())
     }
 
+    /// Remarks on settings that have no effect, one per step and cause (`line_search` where the
+    /// residual is not an energy gradient: Lagrange multipliers, follower pressures).
+    #[must_use]
+    pub fn notes(&self) -> Vec<String> {
+        let multipliers: Vec<&str> = self
+            .contacts
+            .iter()
+            .filter(|c| c.method == crate::model::ContactMethod::Multiplier)
+            .map(|c| c.name.as_str())
+            .collect();
+        let mut notes = Vec::new();
+        for (s, step) in self
+            .steps
+            .iter()
+            .enumerate()
+            .filter(|(_, st)| st.line_search)
+        {
+            let followers: Vec<&str> = self
+                .loads
+                .iter()
+                .filter(|l| l.follower.is_some() && l.active[s])
+                .map(|l| l.name.as_str())
+                .collect();
+            for (what, names) in [
+                ("Lagrange-multiplier contact", &multipliers),
+                ("follower pressure", &followers),
+            ] {
+                if !names.is_empty() {
+                    notes.push(format!(
+                        "step '{}': line_search is ignored with {what} ({}): the residual is not \
+                         the gradient of an energy",
+                        step.name,
+                        names.join(", ")
+                    ));
+                }
+            }
+        }
+        notes
+    }
+
     /// Number of nodal degrees of freedom (`3 × nodes`, inactive included).
     #[must_use]
     pub fn num_nodal_dofs(&self) -> usize {

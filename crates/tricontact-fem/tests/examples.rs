@@ -356,3 +356,20 @@ fn an_unreachable_augmented_tolerance_is_named() {
         "{msg}"
     );
 }
+
+/// `line_search` where it cannot apply (multipliers: no energy to descend) is noted, per step.
+#[test]
+fn an_ignored_line_search_is_noted() {
+    let (_, mut an) = example("contact-block", "model.toml", None);
+    assert!(an.notes().is_empty());
+    an.steps[1].line_search = true;
+    let notes = an.notes();
+    assert_eq!(notes.len(), 1, "{notes:?}");
+    assert!(
+        notes[0]
+            .starts_with("step 'slide': line_search is ignored with Lagrange-multiplier contact"),
+        "{notes:?}"
+    );
+    an.contacts[0].method = tricontact_fem::model::ContactMethod::Penalty;
+    assert!(an.notes().is_empty());
+}
