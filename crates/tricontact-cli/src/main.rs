@@ -169,6 +169,7 @@ fn increment_line(info: &IncrementInfo<'_>, previous: f64) -> String {
         .collect();
     let searches = match info.line_searches {
         0 => String::new(),
+        1 => " (1 line-search trial)".to_string(),
         n => format!(" ({n} line-search trials)"),
     };
     format!(

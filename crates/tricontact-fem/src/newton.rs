@@ -351,7 +351,8 @@ pub fn solve_increment(
                     )
                 };
                 return Err(Failure::Diverged(format!(
-                    "no convergence in {iterations} iterations ({unmet}){hint}"
+                    "no convergence in {iterations} iteration{} ({unmet}){hint}",
+                    if iterations == 1 { "" } else { "s" }
                 )));
             }
         } else if current == 0.0 && dup.iter().all(|&d| d == 0.0) {
