@@ -443,7 +443,19 @@ pub fn read_newton(dir: &Path) -> Result<Vec<NewtonLog>> {
     let path = dir.join(NEWTON_CSV);
     let text = std::fs::read_to_string(&path).map_err(|e| FemError::io(&path, e))?;
     let mut logs: Vec<NewtonLog> = Vec::new();
+    let header = "step,increment,iteration,relative_residual";
+    if let Some(first) = text.lines().next()
+        && first.trim_start_matches('\u{feff}').trim() != header
+    {
+        return Err(FemError::Output(format!(
+            "{}:1: expected the header '{header}', found '{first}'",
+            path.display()
+        )));
+    }
     for (n, line) in text.lines().enumerate().skip(1) {
+        if line.trim().is_empty() {
+            continue;
+        }
         let bad = || {
             FemError::Output(format!(
                 "{}:{}: malformed row '{line}'",
@@ -456,7 +468,7 @@ pub fn read_newton(dir: &Path) -> Result<Vec<NewtonLog>> {
             return Err(bad());
         };
         let step: usize = step.parse().map_err(|_| bad())?;
-        let increment: usize = inc.parse().map_err(|_| bad())?;
+        let increment: usize = inc.parse().ok().filter(|&i| i > 0).ok_or_else(bad)?;
         let iteration: usize = iteration.parse().map_err(|_| bad())?;
         let r: f64 = r.parse().map_err(|_| bad())?;
         // Iterations count 0, 1, … within an increment: a row out of sequence is not ours.
@@ -487,7 +499,7 @@ fn folder_series(dir: &Path, pick: Option<(usize, usize)>) -> Result<Series> {
     let logs = read_newton(dir)?;
     let log = match pick {
         Some((s, i)) => logs.iter().find(|l| l.step + 1 == s && l.increment == i),
-        None => logs.last(),
+        None => logs.iter().max_by_key(|l| (l.step, l.increment)),
     }
     .ok_or_else(|| {
         FemError::Output(format!(

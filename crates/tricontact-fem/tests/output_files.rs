@@ -291,3 +291,29 @@ fn newton_rows_out_of_sequence_are_malformed() {
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
+
+/// `newton.csv` must start with its header (a file without one would lose its first row), may end
+/// with a blank line, and increments count from 1; the default increment is the last by step and
+/// increment, not by file order.
+#[test]
+fn newton_csv_header_blank_lines_and_last_increment() {
+    let dir = newton_folder("plot-header", &["1", "1e-3"]);
+    let file = dir.join("newton.csv");
+    let good = std::fs::read_to_string(&file).expect("csv");
+    let png = dir.join("p.png");
+    let plot = |text: &str| {
+        std::fs::write(&file, text).expect("write");
+        compare_newton(std::slice::from_ref(&dir), None, &png).map_err(|e| e.to_string())
+    };
+    let e =
+        plot(good.lines().skip(1).collect::<Vec<_>>().join("\n").as_str()).expect_err("no header");
+    assert!(e.contains(":1: expected the header"), "{e}");
+    plot(&format!("{good}\n\n")).expect("trailing blank lines");
+    let e = plot(&format!("{good}2,0,0,1\n")).expect_err("increment 0");
+    assert!(e.contains(":4: malformed row '2,0,0,1'"), "{e}");
+    // Step 2 written before step 1 (which has nothing to plot): the default is step 2.
+    let rows =
+        "step,increment,iteration,relative_residual\n2,1,0,1\n2,1,1,1e-6\n1,1,0,0\n1,1,1,0\n";
+    plot(rows).expect("step 2 has something to plot");
+    let _ = std::fs::remove_dir_all(&dir);
+}
