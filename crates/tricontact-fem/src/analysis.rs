@@ -140,10 +140,65 @@ impl Analysis {
             .map_or(&[], |(_, r)| r.as_slice())
     }
 
-    /// Remarks on settings that have no effect, one per step and cause (`line_search` where the
-    /// residual is not an energy gradient: Lagrange multipliers, follower pressures).
+    /// Remarks on the model that are not errors, one per step and cause: a `line_search` that
+    /// cannot apply (the residual is not an energy gradient: Lagrange multipliers, follower
+    /// pressures), and a body part whose rigid motion neither its boundaries nor the normals of
+    /// its contacts hold (frictionless contact holds a slave node, and the facet it faces, only
+    /// along the facet normal; the normals are those at the start, of slave nodes within reach of
+    /// a master facet). Without contact pairs such a body is an error, not a note.
     #[must_use]
     pub fn notes(&self) -> Vec<String> {
+        let mut notes = self.line_search_notes();
+        if self.contacts.is_empty() {
+            return notes;
+        }
+        let held = self.initial_contact_normals();
+        for (s, step) in self.steps.iter().enumerate() {
+            let (mask, _) = crate::driver::step_constraints(self, s);
+            if let Err(m) = crate::rigid::check_supports_with(self, &mask, &held) {
+                notes.push(format!(
+                    "step '{}': with its boundaries and the initial contact normals, {}; \
+                     frictionless contact leaves such motion undetermined",
+                    step.name,
+                    m.trim_end_matches("; add supports")
+                ));
+            }
+        }
+        notes
+    }
+
+    /// `(node, normal)` for each slave node within reach of a master facet at the reference
+    /// positions, and for the nodes of that facet.
+    fn initial_contact_normals(&self) -> Vec<(usize, [f64; 3])> {
+        let x: Vec<tricontact::Vec3> = self
+            .mesh
+            .nodes
+            .iter()
+            .map(|p| tricontact::Vec3::new(p[0], p[1], p[2]))
+            .collect();
+        let mut held = Vec::new();
+        for pass in self.contacts.iter().flat_map(|c| &c.passes) {
+            let Ok(bvh) = tricontact::search::Bvh::build(&pass.surface, &x, pass.radius) else {
+                continue;
+            };
+            for &s in &pass.slaves {
+                let Some((f, pair)) = u32::try_from(s).ok().and_then(|node| {
+                    tricontact::contact::choose_facet(&pass.surface, &bvh, &x, node, pass.radius)
+                }) else {
+                    continue;
+                };
+                let w = pair.facet.normal();
+                let w = [w[0], w[1], w[2]];
+                held.push((s, w));
+                for a in pass.surface.facets()[f as usize] {
+                    held.push((a as usize, w));
+                }
+            }
+        }
+        held
+    }
+
+    fn line_search_notes(&self) -> Vec<String> {
         let multipliers: Vec<&str> = self
             .contacts
             .iter()

@@ -25,6 +25,24 @@ fn find(parent: &mut [usize], mut a: usize) -> usize {
 /// # Errors
 /// A description of the under-supported component.
 pub fn check_supports(an: &Analysis, prescribed: &[bool]) -> Result<(), String> {
+    check_supports_with(an, prescribed, &[])
+}
+
+/// [`check_supports`] with further constraints `(node, direction)`: the node's motion along the
+/// (unit) direction is held, as frictionless contact holds a slave node along its facet normal.
+///
+/// # Errors
+/// A description of the under-supported component.
+pub fn check_supports_with(
+    an: &Analysis,
+    prescribed: &[bool],
+    held: &[(usize, [f64; 3])],
+) -> Result<(), String> {
+    let mut directions: std::collections::HashMap<usize, Vec<[f64; 3]>> =
+        std::collections::HashMap::new();
+    for &(a, d) in held {
+        directions.entry(a).or_default().push(d);
+    }
     let n = an.mesh.nodes.len();
     let mut parent: Vec<usize> = (0..n).collect();
     for be in &an.body {
@@ -59,7 +77,10 @@ pub fn check_supports(an: &Analysis, prescribed: &[bool]) -> Result<(), String> 
             }
         }
         let l = if l > 0.0 { l } else { 1.0 };
-        let mut g = Matrix6::<f64>::zeros();
+        // G over the held DOFs and directions; G_all over every DOF, whose null space holds the
+        // modes the part does not have at all (rotations of a lone node, as the nodes of a rigid
+        // master without elements are).
+        let (mut g, mut g_all) = (Matrix6::<f64>::zeros(), Matrix6::<f64>::zeros());
         for &a in nodes {
             let x = [
                 (an.mesh.nodes[a][0] - c[0]) / l,
@@ -67,37 +88,17 @@ pub fn check_supports(an: &Analysis, prescribed: &[bool]) -> Result<(), String> 
                 (an.mesh.nodes[a][2] - c[2]) / l,
             ];
             for i in 0..3 {
-                if !prescribed[3 * a + i] {
-                    continue;
-                }
-                // Row of the rigid-mode matrix for DOF (a, i): translation e_i,
-                // rotation ω: (ω × x)_i.
-                let mut row = [0.0; 6];
-                row[i] = 1.0;
-                match i {
-                    0 => {
-                        row[4] = x[2];
-                        row[5] = -x[1];
-                    }
-                    1 => {
-                        row[3] = -x[2];
-                        row[5] = x[0];
-                    }
-                    _ => {
-                        row[3] = x[1];
-                        row[4] = -x[0];
-                    }
-                }
-                for p in 0..6 {
-                    for q in 0..6 {
-                        g[(p, q)] += row[p] * row[q];
-                    }
+                let row = mode_row(&unit(i), &x);
+                add_outer(&mut g_all, &row);
+                if prescribed[3 * a + i] {
+                    add_outer(&mut g, &row);
                 }
             }
+            for n in directions.get(&a).into_iter().flatten() {
+                add_outer(&mut g, &mode_row(n, &x));
+            }
         }
-        let eig = SymmetricEigen::new(g).eigenvalues;
-        let max = eig.iter().fold(0.0f64, |m, v| m.max(*v));
-        let free = eig.iter().filter(|&&v| v <= 1e-10 * max.max(1.0)).count();
+        let free = nullity(g).saturating_sub(nullity(g_all));
         if free > 0 {
             return Err(format!(
                 "the body part containing node {} has {free} unconstrained rigid-body mode(s); add supports",
@@ -106,4 +107,39 @@ pub fn check_supports(an: &Analysis, prescribed: &[bool]) -> Result<(), String> 
         }
     }
     Ok(())
+}
+
+/// The unit vector along axis `i`.
+fn unit(i: usize) -> [f64; 3] {
+    let mut e = [0.0; 3];
+    e[i] = 1.0;
+    e
+}
+
+/// The rigid modes seen along direction `n` at the (scaled) position `x`:
+/// `n·(t + ω × x) = [n, x × n]·[t, ω]`.
+fn mode_row(n: &[f64; 3], x: &[f64; 3]) -> [f64; 6] {
+    [
+        n[0],
+        n[1],
+        n[2],
+        x[1] * n[2] - x[2] * n[1],
+        x[2] * n[0] - x[0] * n[2],
+        x[0] * n[1] - x[1] * n[0],
+    ]
+}
+
+fn add_outer(g: &mut Matrix6<f64>, row: &[f64; 6]) {
+    for p in 0..6 {
+        for q in 0..6 {
+            g[(p, q)] += row[p] * row[q];
+        }
+    }
+}
+
+/// Eigenvalues of the Gram matrix `g` at most `10⁻¹⁰` of the largest (or of 1).
+fn nullity(g: Matrix6<f64>) -> usize {
+    let eig = SymmetricEigen::new(g).eigenvalues;
+    let max = eig.iter().fold(0.0f64, |m, v| m.max(*v));
+    eig.iter().filter(|&&v| v <= 1e-10 * max.max(1.0)).count()
 }

@@ -373,3 +373,34 @@ fn an_ignored_line_search_is_noted() {
     an.contacts[0].method = tricontact_fem::model::ContactMethod::Penalty;
     assert!(an.notes().is_empty());
 }
+
+/// A body held sideways by nothing but frictionless contact has rigid motions no normal resists:
+/// noted per step (the examples, whose contacts hold what their boundaries leave free, get none).
+#[test]
+fn a_body_held_only_along_contact_normals_is_noted() {
+    for (dir, model) in [
+        ("contact-block", "model.toml"),
+        ("hertz", "penalty.toml"),
+        ("patch", "penalty.toml"),
+        ("sliding", "model.toml"),
+    ] {
+        let (_, an) = example(dir, model, None);
+        assert!(an.notes().is_empty(), "{dir}/{model}: {:?}", an.notes());
+    }
+    let (_, mut an) = example("contact-block", "model.toml", None);
+    for b in an
+        .boundaries
+        .iter_mut()
+        .filter(|b| b.name.starts_with("block_top"))
+    {
+        b.values[0] = None;
+        b.values[1] = None;
+    }
+    let notes = an.notes();
+    assert_eq!(notes.len(), 2, "{notes:?}");
+    assert!(
+        notes[0].starts_with("step 'press': with its boundaries and the initial contact normals")
+            && notes[0].contains("has 3 unconstrained rigid-body mode(s)"),
+        "{notes:?}"
+    );
+}
