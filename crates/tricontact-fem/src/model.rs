@@ -400,7 +400,14 @@ impl Model {
     /// A syntax/schema error with line and column.
     pub fn parse(text: &str, path: &Path) -> Result<Self> {
         toml::from_str(text).map_err(|e| {
-            let message = e.message().trim().replace('\n', " ");
+            let mut message = e.message().trim().replace('\n', " ");
+            // The parser's "duplicate key" does not say which: its span covers the key.
+            if message == "duplicate key"
+                && let Some(key) = e.span().and_then(|s| text.get(s)).map(str::trim)
+                && !key.is_empty()
+            {
+                message = format!("duplicate key `{key}`");
+            }
             let at = e
                 .span()
                 .map(|s| {

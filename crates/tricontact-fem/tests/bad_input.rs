@@ -310,3 +310,23 @@ fn inconsistent_physical_names_are_rejected() {
         );
     }
 }
+
+/// A key given twice is named, with its line and column (the parser's message names none).
+#[test]
+fn a_duplicate_key_is_named() {
+    for (text, expected) in [
+        (
+            "[mesh]\nfile = \"a.msh\"\nfile = \"b.msh\"\n",
+            "line 3, column 1: duplicate key `file`",
+        ),
+        (
+            "[mesh]\nfile = \"a.msh\"\n[mesh]\n",
+            "line 3, column 2: duplicate key `mesh`",
+        ),
+    ] {
+        let e = tricontact_fem::model::Model::parse(text, std::path::Path::new("m.toml"))
+            .expect_err("duplicate")
+            .to_string();
+        assert!(e.contains(expected), "{e}");
+    }
+}
