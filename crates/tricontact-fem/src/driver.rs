@@ -472,12 +472,10 @@ mod tests {
             !c.failed(),
             "1/16 is below the smallest increment, 1/4 / 2^2"
         );
-        assert!(
-            c.exhausted()
-                == "after 0 cutbacks, at the smallest increment max_cutbacks = 2 allows: 1/2^2 of \
-                    the initial one",
-            "{}",
-            c.exhausted()
+        assert_eq!(
+            c.exhausted(),
+            "after 0 cutbacks, at the smallest increment max_cutbacks = 2 allows: 1/2^2 of the \
+             initial one"
         );
         let mut c = IncrementControl::new(4, 2);
         assert!(c.failed() && c.failed());

@@ -115,12 +115,16 @@ fn weighted(v: &[f64], w: &[f64]) -> f64 {
     norm(v.iter().zip(w).map(|(a, b)| a * b))
 }
 
+/// Norm of `v` divided entry by entry by `w`.
+fn divided(v: &[f64], w: &[f64]) -> f64 {
+    norm(v.iter().zip(w).map(|(a, b)| a / b))
+}
+
 /// Weights of the convergence norms ([`ExtraTerms::residual_scales`]): per equation for residuals
-/// and corrections, per global DOF for displacements. The residual weights also scale the linear
-/// system symmetrically (rows and columns of the extra unknowns).
+/// (corrections are divided by them), per global DOF for displacements. The residual weights also
+/// scale the linear system symmetrically (rows and columns of the extra unknowns).
 struct Weights {
     residual: Vec<f64>,
-    correction: Vec<f64>,
     dof: Vec<f64>,
 }
 
@@ -128,7 +132,6 @@ impl Weights {
     fn new(dm: &DofMap, scales: &[f64]) -> Self {
         let mut w = Self {
             residual: vec![1.0; dm.n_eq],
-            correction: vec![1.0; dm.n_eq],
             dof: vec![1.0; dm.eq.len()],
         };
         for (k, &kappa) in scales.iter().enumerate() {
@@ -137,7 +140,6 @@ impl Weights {
                 w.dof[dof] = 1.0 / kappa;
                 if dm.eq[dof] != NO_EQ {
                     w.residual[dm.eq[dof]] = kappa;
-                    w.correction[dm.eq[dof]] = 1.0 / kappa;
                 }
             }
         }
@@ -406,7 +408,7 @@ pub fn solve_increment(
                 u[dof] += du[e];
             }
         }
-        full_norm = weighted(&du, &weights.correction);
+        full_norm = divided(&du, &weights.residual);
         du_norm = full_norm;
         if searching && !predictor {
             search = Some(LineSearch::new(du, &rhs));
