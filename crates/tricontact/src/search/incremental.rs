@@ -3,21 +3,51 @@
 //! # Neighbourhood lists
 //! A full search ([`Neighbourhoods::new`]) records, for each query, its point `p₀`, its closest
 //! distance `d₀`, and every facet within the reach `ρ = d₀ + skin` with its distance `d₀(f)` then
-//! (sorted by it; stored in `f32`, rounded down), together with the surface's node positions `x₀`.
-//! One traversal per query finds both: a box is pruned when it is farther than the best distance
-//! so far plus the skin (queries in parallel chunks, each hinted with the previous one's answer).
+//! (sorted by it; stored in `f32`, rounded down) and the direction `n̂(f)` from its closest point
+//! to `p₀` (three bytes, `search::direction`), together with the surface's node positions
+//! `x₀`. One traversal per query finds them: a box is pruned when it is farther than the best
+//! distance so far plus the skin (queries in parallel chunks, each hinted with the previous one's
+//! answer). A query's point, reach, first three listed facets and the distance of the fourth fill
+//! one 64-byte record, which is all most queries read.
 //!
 //! # Certificate
 //! Later, with node positions `x` and query point `p`, let `δ = maxₙ |xₙ − x₀ₙ|` over the
 //! surface's nodes and `m = |p − p₀| + δ`. Every point of a facet is a convex combination of its
 //! nodes, so it moved by at most `δ`, and the distance from the query to any facet changed by at
-//! most `m`: `d(f) ≥ d₀(f) − m`. The query measures its listed facets in increasing `d₀(f)` until
-//! `d₀(f) − m` exceeds the best distance `b` found: the facets left are farther than `b`. A facet
-//! that is not listed was farther than `ρ`, so it is now farther than `ρ − m`; when `b < ρ − m` the
-//! best measured facet is the closest of all. Candidates are measured with the kernel the tree
-//! uses ([`crate::distance_squared_to_triangle`]) and compared in the same total order
-//! (distance, then facet index), so the answer is the tree's, exactly. A margin of 10⁻⁹ of the
-//! coordinates' magnitude absorbs rounding in these bounds.
+//! most `m`: `d(f) ≥ d₀(f) − m`. A facet that is not listed was farther than `ρ`, so it is now
+//! farther than `ρ − m`; when the best distance `b` found satisfies `b < ρ − m`, the best listed
+//! facet is the closest of all. The query measures its first listed facet, then goes down its list
+//! in increasing `d₀(f)` until `d₀(f) − m` exceeds `b`: the facets left are farther than `b`.
+//!
+//! A facet near the first in `d₀` (a point far off a flat patch is almost as far from the
+//! neighbouring facets) is measured only if a sharper bound cannot exclude it. Distances do not
+//! change under a common translation `T` of point and facet, and the distance to a convex set is
+//! convex and 1-Lipschitz, with gradient `n̂(f)` at `p₀`; hence, for any `T`,
+//!
+//! `d(f) ≥ d₀(f) + n̂(f)·(p − p₀ − T) − maxₙ∈f |xₙ − x₀ₙ − T|`.
+//!
+//! The search takes for `T` the motion of the facet's own first node (any `T` will do, and each
+//! facet may have its own). When the surface moves smoothly (translating, rotating, deforming a
+//! little) the last term is then the facet's own deformation, and the middle one nearly the change
+//! the measured first facet went through, so close competitors are excluded without measuring
+//! them (on the benchmark's torus after a motion of 0.01 element sizes: 1.2 facets measured per
+//! query instead of 2.0 with the Lipschitz bound alone). The stored `d₀(f)` is rounded down, `n̂`
+//! decoded within `DIRECTION_ERROR` (7·10⁻³) (times `|p − p₀ − T|₁`), and a margin of 10⁻⁹ of the
+//! coordinates' magnitude absorbs rounding in all these bounds; where `p₀` was within 10⁻⁶ of that
+//! magnitude of a facet, its `n̂` is zero (the subgradient 0, exact).
+//!
+//! Candidates are measured with the kernel the tree uses ([`crate::distance_squared_to_triangle`],
+//! bit for bit) and compared in the same total order (distance, then facet index), so the answer
+//! is the tree's, exactly.
+//!
+//! # Order of work
+//! Queries go in chunks of 256 (in parallel); within a chunk, eight at a time, their first
+//! listed facets are measured together (`search::lanes`) and written as the answers, and
+//! each query is screened: every facet the bounds cannot exclude is put aside (all exclusions are
+//! against the first facet's distance; measuring others can only lower it). The facets put aside
+//! are then measured eight at a time, and a better one replaces the answer. A query whose first
+//! listed facet is missing (empty list, or excluded by the query) goes through the same tests one
+//! facet at a time.
 //!
 //! A query whose answer is not certified falls back to the tree, which
 //! [`Neighbourhoods::closest_all`] updates first, once, only if some query needs it: the certified
@@ -27,36 +57,34 @@
 //!
 //! # Degenerate facets
 //! A query whose best listed facet is degenerate now is not certified (it falls back to the tree,
-//! which leaves degenerate facets out); degeneracy is checked on the winner only. Facets that were
-//! degenerate when the lists were made are in no list; every query measures those that are valid
-//! now.
-//!
-//! # Cost
-//! A measured facet costs one Voronoi-region computation, which gives both the squared distance
-//! the order compares and the closest point reported; only the winner is checked for degeneracy,
-//! and answers are written in place. Measuring the listed facets four at a time with the tree's
-//! branch-free kernel was slower (173 against 96 ns per query on the 10⁴-facet torus): it measures
-//! more of them, and the scalar kernel returns early in vertex regions. Measuring in rounds
-//! across the queries of a chunk instead (each round takes every unfinished query's next listed
-//! facet, four (query, facet) pairs per lane evaluation, closest points bit for bit the scalar
-//! kernel's) was slower too: 139 against 111 ns per query on the 10⁵-facet torus after a motion
-//! of 0.01 h, and 136 ns with the rounds measured by the scalar kernel — the bookkeeping of the
-//! rounds costs more than the lanes save on two facets per query.
+//! which leaves degenerate facets out); degeneracy is checked on the winner only. The lists keep
+//! the smallest node motion that could make one of their facets degenerate (`robustness`): a
+//! call that moved the nodes less checks none; otherwise the first listed facets are cleared by a
+//! lane test with room for rounding (`lanes::clearly_valid`) and the others by
+//! [`crate::Facet::new`]. Facets that were degenerate when the lists were made are in no list;
+//! every query measures those that are valid now.
 
 use rayon::prelude::*;
 
 use crate::closest::{ClosestPoint, closest_point_and_distance_squared};
-use crate::facet::Facet;
+use crate::facet::{DEGENERACY_TOLERANCE, Facet};
 use crate::linalg::Vec3;
 use crate::search::bvh::{Bvh, Update};
-use crate::search::lanes;
+use crate::search::direction::{DIRECTION_ERROR, Direction};
+use crate::search::lanes::{self, PAIRS, Pairs};
+use crate::search::layout::index;
 use crate::search::node::{as_leaf, round_down};
 use crate::search::query::{HINT_CHUNK, TIE_MARGIN, check_answers, farthest_first};
 use crate::search::query::{Hit, Query};
+use crate::search::screen::{Limits, Listed, NEAR, Stage};
 use crate::search::surface::{Surface, SurfaceError};
 
 /// Relative margin of the certificate, on the magnitude of the coordinates and distances.
 const MARGIN: f64 = 1e-9;
+
+/// Below this distance, relative to the magnitude of the coordinates, a listed facet's direction
+/// is not stored (zero): its rounding error could exceed [`DIRECTION_ERROR`].
+const DIRECTION_FLOOR: f64 = 1e-6;
 
 /// Queries answered in one sequential run of [`Neighbourhoods::closest_all_into`].
 const CHUNK: usize = 256;
@@ -74,35 +102,112 @@ pub struct IncrementalStats {
     pub update: Option<Update>,
 }
 
+/// One listed facet after the first.
+#[derive(Debug, Clone, Copy)]
+struct Entry {
+    /// The facet (for an empty place of a [`Head`], its first listed facet).
+    facet: u32,
+    /// Its distance then, rounded down to `f32` (`+∞` for an empty place in a [`Head`]).
+    distance: f32,
+    /// The direction from its closest point then to the query point then (or zero).
+    direction: Direction,
+}
+
+impl Entry {
+    /// `false` for an empty place of a [`Head`].
+    #[inline]
+    fn listed(&self) -> bool {
+        self.distance < f32::INFINITY
+    }
+}
+
+/// What a call reads of a query, in one cache line: its point and reach then, its first listed
+/// facet (the closest then) and the next [`NEAR`], the distance of the one after, and where the
+/// rest of its list starts.
+#[derive(Debug, Clone, Copy)]
+#[repr(C, align(64))]
+struct Head {
+    /// The query point when the lists were made.
+    point: Vec3,
+    /// The radius within which the list holds every facet, rounded down (`+∞` without any facet).
+    reach: f32,
+    /// The first listed facet, [`NONE`] for an empty list.
+    facet: u32,
+    /// The next listed facets (past the end of the list: empty places).
+    near: [Entry; NEAR],
+    /// The distance then of the listed facet after those (`+∞` past the end).
+    after: f32,
+    /// The rest of the list is `entries[start..]` up to the next head's `start`.
+    start: u32,
+}
+
+/// The facet of an empty list.
+const NONE: u32 = u32::MAX;
+
 /// Per-query neighbourhood lists from a full search, for the incremental search.
 #[derive(Debug, Clone)]
 pub struct Neighbourhoods {
     /// Surface node positions when the lists were made.
     reference: Vec<Vec3>,
-    /// Query points then.
-    points: Vec<Vec3>,
-    /// Per query: the radius within which its list holds every facet (`+∞` without any facet).
-    reach: Vec<f64>,
-    /// Per query: its entries are `facets[start[i]..start[i + 1]]` (and `distances`).
-    start: Vec<usize>,
-    facets: Vec<u32>,
-    /// Distances then, rounded down to `f32`, increasing within each list.
-    distances: Vec<f32>,
+    /// One per query, and a last one that only closes the entries.
+    heads: Vec<Head>,
+    entries: Vec<Entry>,
     /// Facets degenerate when the lists were made.
     degenerate: Vec<u32>,
+    /// A node motion below which no listed facet can have become degenerate (see
+    /// [`robustness`]): a call whose largest motion is below it checks no facet for degeneracy.
+    robust: f64,
 }
 
-/// The best candidate of an incremental query so far.
+/// How a listed facet moved: `T`, the motion of its first node, and `maxₙ |xₙ − x₀ₙ − T|₁` over
+/// its nodes (the `1`-norm bounds the Euclidean one; NaN for a motion that is not finite).
+#[derive(Debug, Clone, Copy)]
+struct Moved {
+    translation: Vec3,
+    spread: f64,
+}
+
+/// The best candidate of an incremental query so far; `closest` is `None` for the first listed
+/// facet, whose closest point is already in the query's answer slot.
 #[derive(Clone, Copy)]
 struct Best {
     d2: f64,
+    distance: f64,
     facet: u32,
-    closest: ClosestPoint,
+    closest: Option<ClosestPoint>,
 }
 
-/// `Ok` when a query's answer was certified (and written), else `Err(best facet found)`, with the
-/// number of facets measured.
-type Outcome = (Result<(), Option<u32>>, usize);
+/// What every query of one call shares: the largest node motion `δ`, the squared search distance,
+/// and the facets that were degenerate when the lists were made and are valid now.
+struct Shared<'a> {
+    surface: &'a Surface,
+    positions: &'a [Vec3],
+    delta: f64,
+    max2: f64,
+    valid: &'a [u32],
+    /// `true` when no listed facet can have become degenerate (the motion is below the lists'
+    /// robustness).
+    sound: bool,
+}
+
+/// A query's motion `p − p₀`, `m` of the Lipschitz bound, and the margin `tol` on distances.
+struct Bounds {
+    dp: Vec3,
+    m: f64,
+    tol: f64,
+}
+
+/// A query of a chunk with facets put aside: its place in the chunk, its best (squared distance,
+/// facet) so far, whether that facet was measured first and is clearly valid, and whether it is
+/// to fall back whatever the facets put aside give.
+#[derive(Debug, Clone, Copy)]
+struct Open {
+    place: u32,
+    d2: f64,
+    facet: u32,
+    clear: bool,
+    fallback: bool,
+}
 
 impl Neighbourhoods {
     /// Lists, for each query, the facets within its closest distance plus `skin` (in the model's
@@ -111,7 +216,8 @@ impl Neighbourhoods {
     /// `bvh` must be built or updated at `positions`.
     ///
     /// # Errors
-    /// [`SurfaceError::PositionCount`] if `positions` misses nodes of the surface.
+    /// [`SurfaceError::PositionCount`] if `positions` misses nodes of the surface;
+    /// [`SurfaceError::ListsTooLong`] if the lists exceed 2³² entries.
     pub fn new(
         bvh: &Bvh,
         surface: &Surface,
@@ -132,39 +238,82 @@ impl Neighbourhoods {
                 })
             })
             .collect();
-        let mut start = Vec::with_capacity(queries.len() + 1);
-        start.push(0);
         let total: usize = lists.iter().map(|(_, l)| l.len()).sum();
-        let (mut facets, mut distances) = (Vec::with_capacity(total), Vec::with_capacity(total));
-        for (_, list) in &lists {
-            facets.extend(list.iter().map(|&(_, f)| f));
-            distances.extend(list.iter().map(|&(d2, _)| round_down(d2.sqrt())));
-            start.push(facets.len());
+        let too_long = || SurfaceError::ListsTooLong { entries: total };
+        let mut entries = Vec::with_capacity(total.saturating_sub((1 + NEAR) * queries.len()));
+        let mut heads = Vec::with_capacity(queries.len() + 1);
+        for (q, (reach, list)) in queries.iter().zip(&lists) {
+            let first = list.first().map_or(0, |&(_, f)| f);
+            let empty = Entry {
+                facet: first,
+                distance: f32::INFINITY,
+                direction: Direction::ZERO,
+            };
+            let entry = |k: usize| {
+                list.get(k)
+                    .map_or(empty, |&(d2, f)| entry(surface, positions, q, f, d2))
+            };
+            heads.push(Head {
+                point: q.point,
+                reach: round_down(*reach),
+                facet: list.first().map_or(NONE, |&(_, f)| f),
+                near: std::array::from_fn(|k| entry(1 + k)),
+                after: list
+                    .get(1 + NEAR)
+                    .map_or(f32::INFINITY, |&(d2, _)| round_down(d2.sqrt())),
+                start: u32::try_from(entries.len()).map_err(|_| too_long())?,
+            });
+            entries.extend((1 + NEAR..list.len()).map(entry));
         }
+        let empty = Entry {
+            facet: 0,
+            distance: f32::INFINITY,
+            direction: Direction::ZERO,
+        };
+        heads.push(Head {
+            point: Vec3::zeros(),
+            reach: 0.0,
+            facet: NONE,
+            near: [empty; NEAR],
+            after: f32::INFINITY,
+            start: u32::try_from(entries.len()).map_err(|_| too_long())?,
+        });
+        let robust = lists
+            .par_iter()
+            .flat_map_iter(|(_, l)| l.iter().map(|&(_, f)| f))
+            .map(|f| robustness(&surface.corners(f, positions)))
+            .reduce(|| f64::INFINITY, f64::min);
         Ok(Self {
             reference: positions[..surface.node_count()].to_vec(),
-            points: queries.iter().map(|q| q.point).collect(),
-            reach: lists.iter().map(|(r, _)| *r).collect(),
-            start,
-            facets,
-            distances,
+            heads,
+            entries,
             degenerate: bvh.degenerate_facets(),
+            robust,
         })
     }
 
-    /// The number of listed facets, all queries together (the lists' memory is 8 bytes each).
+    /// The number of listed facets, all queries together (the lists take 64 bytes per query and
+    /// 12 per facet beyond the first three of each).
     #[must_use]
     pub fn len(&self) -> usize {
-        self.facets.len()
+        let near =
+            |h: &Head| usize::from(h.facet != NONE) + h.near.iter().filter(|e| e.listed()).count();
+        self.entries.len() + self.heads.iter().map(near).sum::<usize>()
     }
 
     /// `true` when no query lists any facet.
     #[must_use]
     pub fn is_empty(&self) -> bool {
-        self.facets.is_empty()
+        self.len() == 0
     }
 
-    /// The largest distance any surface node moved since the lists were made.
+    /// The number of queries the lists were made for.
+    fn queries(&self) -> usize {
+        self.heads.len() - 1
+    }
+
+    /// The largest distance any surface node moved since the lists were made (NaN if a position
+    /// is NaN).
     #[must_use]
     pub fn motion(&self, positions: &[Vec3]) -> f64 {
         self.reference
@@ -172,7 +321,21 @@ impl Neighbourhoods {
             .zip(positions.par_iter())
             .with_min_len(4096)
             .map(|(a, b)| (b - a).norm())
-            .reduce(|| 0.0, f64::max)
+            .reduce(|| 0.0, |a, b| if a > b || a.is_nan() { a } else { b })
+    }
+
+    /// How `facet` moved since the lists were made (see [`Moved`]).
+    #[inline(always)]
+    fn moved_of(&self, shared: &Shared<'_>, f: u32) -> Moved {
+        let (positions, reference) = (shared.positions, &self.reference);
+        let [a, b, c] = shared.surface.facets()[f as usize];
+        let t = positions[a as usize] - reference[a as usize];
+        let b = l1(&(positions[b as usize] - reference[b as usize] - t));
+        let c = l1(&(positions[c as usize] - reference[c as usize] - t));
+        Moved {
+            translation: t,
+            spread: if (b + c).is_nan() { f64::NAN } else { b.max(c) },
+        }
     }
 
     /// The closest facet to each query (the same queries, in the same order, as when the lists
@@ -213,41 +376,35 @@ impl Neighbourhoods {
         hits: &mut [Option<Hit>],
     ) -> Result<IncrementalStats, SurfaceError> {
         surface.check_positions(positions)?;
-        if queries.len() != self.points.len() {
+        if queries.len() != self.queries() {
             return Err(SurfaceError::QueryCount {
-                expected: self.points.len(),
+                expected: self.queries(),
                 given: queries.len(),
             });
         }
         check_answers(queries.len(), hits.len())?;
-        let delta = self.motion(positions);
         let valid: Vec<u32> = self
             .degenerate
             .iter()
             .copied()
             .filter(|&f| !is_degenerate(&surface.corners(f, positions)))
             .collect();
-        let max2 = max_distance * max_distance;
+        let delta = self.motion(positions);
+        let shared = Shared {
+            surface,
+            positions,
+            delta,
+            max2: max_distance * max_distance,
+            valid: &valid,
+            sound: delta < self.robust,
+        };
         // Answers are written in place; the (rare) uncertified queries are collected with their
-        // best facet as the tree's hint. Chunks in parallel, a plain loop within each (rayon's
-        // adaptors per query cost about 10 of 128 ns on the 10⁵-facet torus).
+        // best facet as the tree's hint.
         let (measured, fallbacks) = hits
             .par_chunks_mut(CHUNK)
             .zip(queries.par_chunks(CHUNK))
             .enumerate()
-            .map(|(c, (hits, queries))| {
-                let (mut measured, mut fallbacks) = (0, Vec::new());
-                for (k, (hit, q)) in hits.iter_mut().zip(queries).enumerate() {
-                    let i = c * CHUNK + k;
-                    let (outcome, n) =
-                        self.answer((i, q), surface, positions, (delta, max2), &valid, hit);
-                    measured += n;
-                    if let Err(hint) = outcome {
-                        fallbacks.push((i, hint));
-                    }
-                }
-                (measured, fallbacks)
-            })
+            .map(|(c, (hits, queries))| self.answer_chunk(c * CHUNK, queries, &shared, hits))
             .reduce(
                 || (0, Vec::new()),
                 |(m1, mut f1), (m2, f2)| {
@@ -275,53 +432,314 @@ impl Neighbourhoods {
         Ok(stats)
     }
 
-    /// Query `i` from its list, given the motion `δ` and the squared search distance: a certified
-    /// answer is written into `hit` (returning the answer by value, one copy more, was measured
-    /// 4 % slower); see [`Outcome`].
+    /// Answers the queries `first..first + queries.len()` into `hits` (see the module
+    /// documentation, "Order of work"). Returns the facets measured and the uncertified queries
+    /// with their best facet.
+    fn answer_chunk(
+        &self,
+        first: usize,
+        queries: &[Query],
+        shared: &Shared<'_>,
+        hits: &mut [Option<Hit>],
+    ) -> (usize, Vec<(usize, Option<u32>)>) {
+        let mut measured = 0;
+        let mut fallbacks = Vec::new();
+        let mut pairs = Pairs::default();
+        let mut stage = Stage::default();
+        // The queries with facets put aside, and the (query in `open`, facet) pairs.
+        let mut open: Vec<Open> = Vec::new();
+        let mut aside: Vec<(u32, u32)> = Vec::new();
+        let limits = Limits {
+            delta: shared.delta,
+            max_distance: shared.max2.sqrt(),
+            margin: MARGIN,
+        };
+        let facets = shared.surface.facets();
+        let positions = shared.positions;
+        for g in (0..queries.len()).step_by(PAIRS) {
+            let len = (queries.len() - g).min(PAIRS);
+            // Lane k: the first listed facet of query g + k, unless the list is empty or the
+            // query excludes it.
+            let mut live = 0u32;
+            for k in 0..len {
+                let (h, q) = (&self.heads[first + g + k], &queries[g + k]);
+                if h.facet == NONE || q.excludes(shared.surface, h.facet) {
+                    continue;
+                }
+                let [a, b, c] = facets[h.facet as usize];
+                let corners = [
+                    positions[a as usize],
+                    positions[b as usize],
+                    positions[c as usize],
+                ];
+                pairs.set(k, &corners, &q.point);
+                let listed = |e: &Entry| {
+                    let moved = self.moved_of(shared, e.facet);
+                    Listed {
+                        distance: f64::from(e.distance),
+                        direction: e.direction.decode(),
+                        translation: moved.translation,
+                        spread: moved.spread,
+                    }
+                };
+                let near = [listed(&h.near[0]), listed(&h.near[1])];
+                stage.set(k, &h.point, (f64::from(h.reach), f64::from(h.after)), &near);
+                live |= 1 << k;
+            }
+            let mut d2 = [0.0; PAIRS];
+            let mut distance = [0.0; PAIRS];
+            lanes::closest_pairs(&pairs, live, |k, closest, d| {
+                d2[k] = d;
+                distance[k] = closest.distance;
+                hits[g + k] = Some(Hit {
+                    facet: self.heads[first + g + k].facet,
+                    closest,
+                });
+            });
+            let clear = if shared.sound {
+                live
+            } else {
+                lanes::clearly_valid(&pairs, 2.0 * DEGENERACY_TOLERANCE) & live
+            };
+            let screen = stage.screen(&pairs.points, &distance, limits);
+            let screenable = if shared.valid.is_empty() { live } else { 0 };
+            // Certified at once: the usual case.
+            let done = screenable
+                & clear
+                & screen.unlisted
+                & screen.later
+                & !(screen.need[0] | screen.need[1]);
+            measured += done.count_ones() as usize;
+            let all = (1u32 << len) - 1;
+            let mut left = if shared.max2 < f64::INFINITY {
+                all
+            } else {
+                all & !done
+            };
+            while left != 0 {
+                let k = left.trailing_zeros() as usize;
+                left &= left - 1;
+                let (bit, c, i) = (1u32 << k, g + k, first + g + k);
+                let (q, h) = (&queries[c], &self.heads[i]);
+                if done & bit != 0 {
+                    if d2[k] > shared.max2 {
+                        hits[c] = None;
+                    }
+                    continue;
+                }
+                if screenable & bit == 0 {
+                    let head = (live & bit != 0).then(|| Best {
+                        d2: d2[k],
+                        distance: distance[k],
+                        facet: h.facet,
+                        closest: None,
+                    });
+                    let (outcome, n) =
+                        self.answer((i, q), shared, head, clear & bit != 0, &mut hits[c]);
+                    measured += n;
+                    if let Err(hint) = outcome {
+                        fallbacks.push((i, hint));
+                    }
+                    continue;
+                }
+                let o = index(open.len());
+                let before = aside.len();
+                let mut put = |f: u32| {
+                    if !q.excludes(shared.surface, f) {
+                        aside.push((o, f));
+                    }
+                };
+                for (j, e) in h.near.iter().enumerate() {
+                    if screen.need[j] & bit != 0 && e.listed() {
+                        put(e.facet);
+                    }
+                }
+                if screen.later & bit == 0 {
+                    // The rest of the list, one entry at a time, until the Lipschitz bound
+                    // excludes all that follow.
+                    let bounds = self.bounds(i, &q.point, shared);
+                    let b = distance[k];
+                    let (a, z) = (h.start as usize, self.heads[i + 1].start as usize);
+                    for e in &self.entries[a..z] {
+                        if f64::from(e.distance) - bounds.m > b + bounds.tol {
+                            break;
+                        }
+                        if !self.excluded(e, &bounds, shared, b) {
+                            put(e.facet);
+                        }
+                    }
+                }
+                measured += 1 + aside.len() - before;
+                let unlisted = screen.unlisted & bit != 0;
+                if aside.len() > before {
+                    open.push(Open {
+                        place: index(c),
+                        d2: d2[k],
+                        facet: h.facet,
+                        clear: clear & bit != 0,
+                        fallback: !unlisted,
+                    });
+                } else if !unlisted
+                    || (clear & bit == 0
+                        && is_degenerate(&shared.surface.corners(h.facet, positions)))
+                {
+                    fallbacks.push((i, Some(h.facet)));
+                } else if d2[k] > shared.max2 {
+                    hits[c] = None;
+                }
+            }
+        }
+        self.measure_aside(queries, shared, &aside, &mut open, hits);
+        for o in &open {
+            let c = o.place as usize;
+            let degenerate = !o.clear
+                && !shared.sound
+                && is_degenerate(&shared.surface.corners(o.facet, positions));
+            if o.fallback || degenerate {
+                fallbacks.push((first + c, Some(o.facet)));
+            } else if o.d2 > shared.max2 {
+                hits[c] = None;
+            }
+        }
+        (measured, fallbacks)
+    }
+
+    /// Measures the (query, facet) pairs put aside, eight at a time, each against its query's best
+    /// in the tree's order; a better facet is written into the query's answer (and is to be checked
+    /// for degeneracy: `clear` off).
+    fn measure_aside(
+        &self,
+        queries: &[Query],
+        shared: &Shared<'_>,
+        aside: &[(u32, u32)],
+        open: &mut [Open],
+        hits: &mut [Option<Hit>],
+    ) {
+        let mut pairs = Pairs::default();
+        for group in aside.chunks(PAIRS) {
+            for (k, &(o, f)) in group.iter().enumerate() {
+                let q = &queries[open[o as usize].place as usize];
+                pairs.set(k, &shared.surface.corners(f, shared.positions), &q.point);
+            }
+            let live = (1u32 << group.len()) - 1;
+            lanes::closest_pairs(&pairs, live, |k, closest, d2| {
+                let (o, facet) = group[k];
+                let o = &mut open[o as usize];
+                if d2 < o.d2 || (d2 == o.d2 && facet < o.facet) {
+                    (o.d2, o.facet, o.clear) = (d2, facet, false);
+                    hits[o.place as usize] = Some(Hit { facet, closest });
+                }
+            });
+        }
+    }
+
+    /// The motion and margins of query `i` at point `p` (see [`Bounds`]).
+    #[inline(always)]
+    fn bounds(&self, i: usize, p: &Vec3, shared: &Shared<'_>) -> Bounds {
+        let h = &self.heads[i];
+        let dp = p - h.point;
+        let reach = f64::from(h.reach);
+        let reach = if reach.is_finite() { reach } else { 0.0 };
+        Bounds {
+            dp,
+            m: dp.norm() + shared.delta,
+            tol: MARGIN * (p.amax() + h.point.amax() + reach),
+        }
+    }
+
+    /// `true` when the listed facet `e` is farther than `b` now by the first-order bound (with
+    /// `T` the motion of its first node).
+    #[inline(always)]
+    fn excluded(&self, e: &Entry, bounds: &Bounds, shared: &Shared<'_>, b: f64) -> bool {
+        let moved = &self.moved_of(shared, e.facet);
+        let v = bounds.dp - moved.translation;
+        let slack = bounds.tol + DIRECTION_ERROR * l1(&v);
+        f64::from(e.distance) + e.direction.decode().dot(&v) - moved.spread - slack > b
+    }
+
+    /// Query `i` one facet at a time, given the measure of its first listed facet (`head`,
+    /// already written into `hit`; `clear` when that facet is clearly not degenerate; `None` when
+    /// the list is empty or the query excludes it): a certified answer is written into `hit`.
+    /// Returns `Err(best facet found)` when not certified, and the number of facets measured.
     fn answer(
         &self,
         (i, q): (usize, &Query),
-        surface: &Surface,
-        positions: &[Vec3],
-        (delta, max2): (f64, f64),
-        valid: &[u32],
+        shared: &Shared<'_>,
+        head: Option<Best>,
+        clear: bool,
         hit: &mut Option<Hit>,
-    ) -> Outcome {
-        let p0 = &self.points[i];
-        let m = (q.point - p0).norm() + delta;
-        let reach = self.reach[i];
-        let tol =
-            MARGIN * (q.point.amax() + p0.amax() + if reach.is_finite() { reach } else { 0.0 });
-        let range = self.start[i]..self.start[i + 1];
-        let mut best: Option<Best> = None;
-        let mut measured = 0;
-        for (&f, &d0) in self.facets[range.clone()]
+    ) -> (Result<(), Option<u32>>, usize) {
+        let Shared {
+            surface, positions, ..
+        } = *shared;
+        let bounds = self.bounds(i, &q.point, shared);
+        let mut best = head;
+        let mut measured = usize::from(head.is_some());
+        let h = &self.heads[i];
+        let (a, z) = (h.start as usize, self.heads[i + 1].start as usize);
+        let rest = h
+            .near
             .iter()
-            .zip(&self.distances[range])
-        {
-            if best.is_some_and(|b| f64::from(d0) - m > b.closest.distance + tol) {
+            .filter(|e| e.listed())
+            .chain(&self.entries[a..z]);
+        for e in rest {
+            let b = best.map_or(f64::INFINITY, |b| b.distance);
+            if f64::from(e.distance) - bounds.m > b + bounds.tol {
                 break;
             }
-            offer(&mut best, surface, positions, q, f);
+            if best.is_some() && self.excluded(e, &bounds, shared, b) {
+                continue;
+            }
+            offer(&mut best, surface, positions, q, e.facet);
             measured += 1;
         }
-        for &f in valid {
+        for &f in shared.valid {
             offer(&mut best, surface, positions, q, f);
         }
-        measured += valid.len();
+        measured += shared.valid.len();
         // Facets not listed are farther than `limit` now; a degenerate winner is not certified.
-        let limit = reach - m - tol;
-        let b = best.map_or(f64::INFINITY, |b| b.closest.distance);
-        let certified = (b < limit || max2.sqrt() < limit)
-            && best.is_none_or(|b| !is_degenerate(&surface.corners(b.facet, positions)));
-        if !certified {
+        let limit = f64::from(h.reach) - bounds.m - bounds.tol;
+        let b = best.map_or(f64::INFINITY, |b| b.distance);
+        if !(b < limit || shared.max2.sqrt() < limit) {
             return (Err(best.map(|b| b.facet)), measured);
         }
-        *hit = best.filter(|b| b.d2 <= max2).map(|b| Hit {
-            facet: b.facet,
-            closest: b.closest,
+        let degenerate = best.is_some_and(|b| {
+            let known = shared.sound || (clear && b.closest.is_none());
+            !known && is_degenerate(&surface.corners(b.facet, positions))
         });
+        if degenerate {
+            return (Err(best.map(|b| b.facet)), measured);
+        }
+        match best {
+            Some(b) if b.d2 <= shared.max2 => {
+                if let Some(closest) = b.closest {
+                    *hit = Some(Hit {
+                        facet: b.facet,
+                        closest,
+                    });
+                }
+            }
+            _ => *hit = None,
+        }
         (Ok(()), measured)
+    }
+}
+
+/// The list entry of `facet` for query `q` at `positions`, `d2` its squared distance from the tree.
+fn entry(surface: &Surface, positions: &[Vec3], q: &Query, facet: u32, d2: f64) -> Entry {
+    let [a, b, c] = surface.corners(facet, positions);
+    let (closest, _) = closest_point_and_distance_squared(&a, &b, &c, &q.point);
+    let d = closest.distance;
+    let floor = DIRECTION_FLOOR * (q.point.amax() + closest.point.amax());
+    let direction = if d > floor {
+        Direction::encode(&((q.point - closest.point) / d))
+    } else {
+        Direction::ZERO
+    };
+    Entry {
+        facet,
+        distance: round_down(d2.sqrt()),
+        direction,
     }
 }
 
@@ -392,8 +810,38 @@ fn offer(best: &mut Option<Best>, surface: &Surface, positions: &[Vec3], q: &Que
         Some(b) => d2 < b.d2 || (d2 == b.d2 && facet < b.facet),
     };
     if better {
-        *best = Some(Best { d2, facet, closest });
+        *best = Some(Best {
+            d2,
+            distance: closest.distance,
+            facet,
+            closest: Some(closest),
+        });
     }
+}
+
+/// `|v|₁ = |v_x| + |v_y| + |v_z| ≥ |v|`.
+#[inline(always)]
+fn l1(v: &Vec3) -> f64 {
+    v.x.abs() + v.y.abs() + v.z.abs()
+}
+
+/// A node motion below which the facet `(a, b, c)` cannot become degenerate: moving each node by at
+/// most `ρ` changes each edge by at most `2ρ`, so twice the area `|w|` falls by at most
+/// `2ρ(|e₁| + |e₂|) + 4ρ²` and the longest edge grows by at most `2ρ`. `ρ = 0.2 |w| / (|e₁| + |e₂|)`
+/// is kept when, with these changes, `|w|` still exceeds twice [`DEGENERACY_TOLERANCE`] times the
+/// longest edge squared and `|w|²` stays a normal number; otherwise `0`.
+fn robustness([a, b, c]: &[Vec3; 3]) -> f64 {
+    let (e1, e2, e3) = (b - a, c - a, c - b);
+    let w = e1.cross(&e2).norm();
+    let (l1, l2) = (e1.norm(), e2.norm());
+    let longest = l1.max(l2).max(e3.norm());
+    let rho = 0.2 * w / (l1 + l2);
+    let low = w - 2.0 * rho * (l1 + l2) - 4.0 * rho * rho;
+    let long = longest + 2.0 * rho;
+    let keeps = low > 2.0 * DEGENERACY_TOLERANCE * long * long
+        && low * low >= 4.0 * f64::MIN_POSITIVE
+        && (low * low).is_finite();
+    if keeps && rho.is_finite() { rho } else { 0.0 }
 }
 
 /// `true` when the facet is degenerate (the tree leaves such facets out).

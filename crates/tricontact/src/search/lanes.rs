@@ -1,46 +1,180 @@
-//! Squared distances from one point to the (up to) four facets of a leaf, computed lane by lane.
+//! The kernel's Voronoi-region computation lane by lane: four facets against one point (a leaf of
+//! the tree), or eight (point, facet) pairs at once (the incremental search).
 //!
 //! The arithmetic is exactly that of [`distance_squared_to_triangle`], operation for operation:
 //! the six dot products `d1 … d6` of the edges `ab`, `ac` with `p − a`, `p − b`, `p − c`, the
 //! three scaled sub-areas `va, vb, vc`, the edge parameters and the face's barycentric coordinates,
 //! and finally `|p − (a N_a + b N_b + c N_c)|²`. The scalar kernel picks the first Voronoi region
 //! whose test holds (vertices, then edges, then the face); here every lane computes every
-//! candidate and selects by the same priority, without branches, so the four facets are evaluated
-//! together, one `wide::f64x4` per quantity (an AVX register where the target has AVX; measured
-//! 1.5–1.7× faster than the same code on `[f64; 4]` arrays, which the compiler left scalar). The
-//! results are bit for bit those of the scalar kernel (no fused multiply–add on either side): the
-//! tree compares exactly the numbers the brute-force search compares. A lane whose selected
-//! coordinates are not finite (extreme coordinates, where the scalar kernel rescales) is
-//! recomputed with the scalar kernel.
+//! candidate and selects by the same priority, without branches, one `wide` vector per quantity
+//! (`f64x4`: an AVX register; `f64x8`: AVX-512 where the target has it; measured 1.5–1.7× faster
+//! than the same code on `[f64; 4]` arrays, which the compiler left scalar). The results are bit
+//! for bit those of the scalar kernel (no fused multiply–add on either side): the tree compares
+//! exactly the numbers the brute-force search compares. A lane whose selected coordinates are not
+//! finite (extreme coordinates, where the scalar kernel rescales) is recomputed with the scalar
+//! kernel. One generic body ([`region`]) serves both widths.
 
-use wide::f64x4;
+use std::ops::{Add, BitAnd, BitOr, Div, Mul, Not, Sub};
 
-use crate::closest::distance_squared_to_triangle;
+use wide::{f64x4, f64x8};
+
+use crate::closest::{
+    ClosestPoint, Feature, closest_point_and_distance_squared, distance_squared_to_triangle,
+};
 use crate::linalg::Vec3;
 
-/// Facets evaluated together.
+/// Facets of one leaf evaluated together.
 pub(crate) const LANES: usize = 4;
 
 /// One coordinate of four facets.
 pub(crate) type V = f64x4;
 
+/// (point, facet) pairs evaluated together by [`closest_pairs`].
+pub(crate) const PAIRS: usize = 8;
+
+/// The operations the region computation needs from a vector of lanes.
+pub(crate) trait Lane:
+    Copy
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + BitAnd<Output = Self>
+    + BitOr<Output = Self>
+    + Not<Output = Self>
+{
+    const ZERO: Self;
+    const ONE: Self;
+    /// Lane-wise `self ≤ other` as a mask.
+    fn le(self, other: Self) -> Self;
+    /// Lane-wise `self ≥ other` as a mask.
+    fn ge(self, other: Self) -> Self;
+    /// Where the mask `self` is set `t`, else `f`.
+    fn pick(self, t: Self, f: Self) -> Self;
+    /// The mask of finite lanes.
+    fn finite(self) -> Self;
+    /// One bit per lane of a mask.
+    fn bits(self) -> u32;
+}
+
+macro_rules! lane {
+    ($t:ty) => {
+        impl Lane for $t {
+            const ZERO: Self = <$t>::ZERO;
+            const ONE: Self = <$t>::ONE;
+            #[inline(always)]
+            fn le(self, other: Self) -> Self {
+                self.simd_le(other)
+            }
+            #[inline(always)]
+            fn ge(self, other: Self) -> Self {
+                self.simd_ge(other)
+            }
+            #[inline(always)]
+            fn pick(self, t: Self, f: Self) -> Self {
+                self.select(t, f)
+            }
+            #[inline(always)]
+            fn finite(self) -> Self {
+                self.is_finite()
+            }
+            #[inline(always)]
+            fn bits(self) -> u32 {
+                self.to_bitmask()
+            }
+        }
+    };
+}
+lane!(f64x4);
+lane!(f64x8);
+
 /// Lane-wise dot product, summed as nalgebra sums a 3-vector dot: `(x·x + y·y) + z·z`.
 #[inline(always)]
-fn dot(u: &[V; 3], v: &[V; 3]) -> V {
+fn dot<L: Lane>(u: &[L; 3], v: &[L; 3]) -> L {
     u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
 }
 
 /// Lane-wise `u − v`.
 #[inline(always)]
-fn sub(u: &[V; 3], v: &[V; 3]) -> [V; 3] {
+fn sub<L: Lane>(u: &[L; 3], v: &[L; 3]) -> [L; 3] {
     [u[0] - v[0], u[1] - v[1], u[2] - v[2]]
 }
 
 /// Where `mask` is set, takes `value` into `n` (a bitwise select, no branch).
 #[inline(always)]
-fn select(n: &mut [V; 3], mask: V, value: [V; 3]) {
+fn select<L: Lane>(n: &mut [L; 3], mask: L, value: [L; 3]) {
     for (dst, src) in n.iter_mut().zip(value) {
-        *dst = mask.select(src, *dst);
+        *dst = mask.pick(src, *dst);
+    }
+}
+
+/// What the region computation gives per lane.
+pub(crate) struct Region<L> {
+    /// Barycentric coordinates of the closest point.
+    pub(crate) n: [L; 3],
+    /// The closest point `a N_a + b N_b + c N_c`.
+    pub(crate) point: [L; 3],
+    /// `|p − point|²`.
+    pub(crate) d2: L,
+    /// Feature masks, in the scalar kernel's priority: vertices 0, 1, 2, edges 0, 1, 2.
+    pub(crate) masks: [L; 6],
+    /// Bits of the lanes whose coordinates are not finite (to be recomputed by the scalar kernel).
+    pub(crate) bad: u32,
+}
+
+/// The Voronoi region, closest point and squared distance of `p` and the facet `(a, b, c)`, lane
+/// by lane (see the module documentation).
+#[inline(always)]
+pub(crate) fn region<L: Lane>(a: &[L; 3], b: &[L; 3], c: &[L; 3], pl: &[L; 3]) -> Region<L> {
+    let (ab, ac, ap) = (sub(b, a), sub(c, a), sub(pl, a));
+    let (bp, cp) = (sub(&ap, &ab), sub(&ap, &ac));
+    let (d1, d2) = (dot(&ab, &ap), dot(&ac, &ap));
+    let (d3, d4) = (dot(&ab, &bp), dot(&ac, &bp));
+    let (d5, d6) = (dot(&ab, &cp), dot(&ac, &cp));
+    let vc = d1 * d4 - d3 * d2;
+    let va = d3 * d6 - d5 * d4;
+    let vb = d5 * d2 - d1 * d6;
+    // The region tests, in the scalar kernel's order of priority (vertices, edges, face).
+    let (zero, one) = (L::ZERO, L::ONE);
+    let v0 = d1.le(zero) & d2.le(zero);
+    let v1 = d3.ge(zero) & d4.le(d3);
+    let v2 = d6.ge(zero) & d5.le(d6);
+    let e0 = vc.le(zero) & d1.ge(zero) & d3.le(zero);
+    let e1 = va.le(zero) & d4.ge(d3) & d5.ge(d6);
+    let e2 = vb.le(zero) & d2.ge(zero) & d6.le(zero);
+    let vertex = v0 | v1 | v2;
+    // One division per lane, that of the region selected: the face's `1 / (va + vb + vc)` or an
+    // edge's parameter, each the scalar kernel's own quotient (a vertex needs none). The face,
+    // then each region of higher priority overrides it where its test holds.
+    let (mut num, mut den) = (one, va + vb + vc);
+    let d43 = d4 - d3;
+    for (mask, (n, d)) in [
+        (e2, (d2, d2 - d6)),
+        (e1, (d43, d43 + (d5 - d6))),
+        (e0, (d1, d1 - d3)),
+        (vertex, (one, one)),
+    ] {
+        num = mask.pick(n, num);
+        den = mask.pick(d, den);
+    }
+    let t = num / den;
+    let mut n = [va * t, vb * t, vc * t];
+    select(&mut n, e2, [one - t, zero, t]);
+    select(&mut n, e1, [zero, one - t, t]);
+    select(&mut n, e0, [one - t, t, zero]);
+    select(&mut n, v2, [zero, zero, one]);
+    select(&mut n, v1, [zero, one, zero]);
+    select(&mut n, v0, [one, zero, zero]);
+    // |p − (a N_a + b N_b + c N_c)|², summed as nalgebra sums it.
+    let point: [L; 3] = std::array::from_fn(|d| a[d] * n[0] + b[d] * n[1] + c[d] * n[2]);
+    let diff = sub(pl, &point);
+    let bad = (!(n[0].finite() & n[1].finite() & n[2].finite())).bits();
+    Region {
+        n,
+        point,
+        d2: dot(&diff, &diff),
+        masks: [v0, v1, v2, e0, e1, e2],
+        bad,
     }
 }
 
@@ -56,59 +190,129 @@ pub(crate) fn distances_squared(corners: &[[Vec3; 3]], p: &Vec3) -> V {
     };
     let (a, b, c) = (corner(0), corner(1), corner(2));
     let pl: [V; 3] = std::array::from_fn(|d| V::splat(p[d]));
-    let (ab, ac, ap) = (sub(&b, &a), sub(&c, &a), sub(&pl, &a));
-    let (bp, cp) = (sub(&ap, &ab), sub(&ap, &ac));
-    let (d1, d2) = (dot(&ab, &ap), dot(&ac, &ap));
-    let (d3, d4) = (dot(&ab, &bp), dot(&ac, &bp));
-    let (d5, d6) = (dot(&ab, &cp), dot(&ac, &cp));
-    let vc = d1 * d4 - d3 * d2;
-    let va = d3 * d6 - d5 * d4;
-    let vb = d5 * d2 - d1 * d6;
-    // The region tests, in the scalar kernel's order of priority (vertices, edges, face).
-    let (zero, one) = (V::ZERO, V::ONE);
-    let v0 = d1.simd_le(zero) & d2.simd_le(zero);
-    let v1 = d3.simd_ge(zero) & d4.simd_le(d3);
-    let v2 = d6.simd_ge(zero) & d5.simd_le(d6);
-    let e0 = vc.simd_le(zero) & d1.simd_ge(zero) & d3.simd_le(zero);
-    let e1 = va.simd_le(zero) & d4.simd_ge(d3) & d5.simd_ge(d6);
-    let e2 = vb.simd_le(zero) & d2.simd_ge(zero) & d6.simd_le(zero);
-    let vertex = v0 | v1 | v2;
-    // One division per lane, that of the region selected: the face's `1 / (va + vb + vc)` or an
-    // edge's parameter, each the scalar kernel's own quotient (a vertex needs none). The face,
-    // then each region of higher priority overrides it where its test holds.
-    let (mut num, mut den) = (one, va + vb + vc);
-    let d43 = d4 - d3;
-    for (mask, (n, d)) in [
-        (e2, (d2, d2 - d6)),
-        (e1, (d43, d43 + (d5 - d6))),
-        (e0, (d1, d1 - d3)),
-        (vertex, (one, one)),
-    ] {
-        num = mask.select(n, num);
-        den = mask.select(d, den);
+    let r = region(&a, &b, &c, &pl);
+    if r.bad == 0 {
+        return r.d2;
     }
-    let t = num / den;
-    let mut n = [va * t, vb * t, vc * t];
-    select(&mut n, e2, [one - t, zero, t]);
-    select(&mut n, e1, [zero, one - t, t]);
-    select(&mut n, e0, [one - t, t, zero]);
-    select(&mut n, v2, [zero, zero, one]);
-    select(&mut n, v1, [zero, one, zero]);
-    select(&mut n, v0, [one, zero, zero]);
-    // |p − (a N_a + b N_b + c N_c)|², summed as nalgebra sums it.
-    let diff: [V; 3] = std::array::from_fn(|d| pl[d] - (a[d] * n[0] + b[d] * n[1] + c[d] * n[2]));
-    let out = dot(&diff, &diff);
-    let bad = (!(n[0].is_finite() & n[1].is_finite() & n[2].is_finite())).to_bitmask();
-    if bad == 0 {
-        return out;
-    }
-    let mut out = out.to_array();
+    let mut out = r.d2.to_array();
     for (k, [a, b, c]) in corners.iter().enumerate() {
-        if bad & (1 << k) != 0 {
+        if r.bad & (1 << k) != 0 {
             out[k] = distance_squared_to_triangle(a, b, c, p);
         }
     }
     V::new(out)
+}
+
+/// Eight (point, facet) pairs, coordinate by coordinate: `corners[v][d][k]` is coordinate `d` of
+/// corner `v` of pair `k`'s facet, `points[d][k]` coordinate `d` of its point.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Pairs {
+    pub(crate) corners: [[[f64; PAIRS]; 3]; 3],
+    pub(crate) points: [[f64; PAIRS]; 3],
+}
+
+impl Pairs {
+    /// Puts the facet `corners` and the point `p` into lane `k`.
+    #[inline(always)]
+    pub(crate) fn set(&mut self, k: usize, corners: &[Vec3; 3], p: &Vec3) {
+        for (v, x) in corners.iter().enumerate() {
+            for d in 0..3 {
+                self.corners[v][d][k] = x[d];
+            }
+        }
+        for d in 0..3 {
+            self.points[d][k] = p[d];
+        }
+    }
+
+    /// Lane `k`'s facet corners and point.
+    fn lane(&self, k: usize) -> ([Vec3; 3], Vec3) {
+        let c = &self.corners;
+        let corner = |v: usize| Vec3::new(c[v][0][k], c[v][1][k], c[v][2][k]);
+        let p = &self.points;
+        (
+            [corner(0), corner(1), corner(2)],
+            Vec3::new(p[0][k], p[1][k], p[2][k]),
+        )
+    }
+}
+
+/// The features by the number [`closest_pairs`] gives them: the region masks' order, then the face.
+const FEATURES: [Feature; 7] = [
+    Feature::Vertex(0),
+    Feature::Vertex(1),
+    Feature::Vertex(2),
+    Feature::Edge(0),
+    Feature::Edge(1),
+    Feature::Edge(2),
+    Feature::Face,
+];
+
+/// The closest point and squared distance of each pair `k` whose bit is set in `live`, bit for
+/// bit those of [`closest_point_and_distance_squared`], handed to `emit(k, closest, d2)` (so a
+/// caller writes them where they belong, without an intermediate array).
+#[inline]
+pub(crate) fn closest_pairs(
+    pairs: &Pairs,
+    live: u32,
+    mut emit: impl FnMut(usize, ClosestPoint, f64),
+) {
+    let load = |v: &[[f64; PAIRS]; 3]| -> [f64x8; 3] { v.map(f64x8::new) };
+    let [a, b, c] = pairs.corners.each_ref().map(load);
+    let r = region(&a, &b, &c, &load(&pairs.points));
+    let n = r.n.map(f64x8::to_array);
+    let point = r.point.map(f64x8::to_array);
+    let d2 = r.d2.to_array();
+    let distance = r.d2.sqrt().to_array();
+    // The feature of each lane, as a number: the first mask set in priority order (vertices 0, 1,
+    // 2, edges 3, 4, 5), 6 for the face.
+    let mut code = f64x8::splat(6.0);
+    for (m, mask) in r.masks.iter().enumerate().rev() {
+        #[allow(clippy::cast_precision_loss)]
+        let value = f64x8::splat(m as f64);
+        code = mask.pick(value, code);
+    }
+    let code = code.trunc_int().to_array();
+    let mut left = live;
+    while left != 0 {
+        let k = left.trailing_zeros() as usize;
+        left &= left - 1;
+        if r.bad & (1 << k) != 0 {
+            let ([a, b, c], p) = pairs.lane(k);
+            let (closest, d2) = closest_point_and_distance_squared(&a, &b, &c, &p);
+            emit(k, closest, d2);
+            continue;
+        }
+        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+        let closest = ClosestPoint {
+            feature: FEATURES[(code[k] as usize).min(6)],
+            barycentric: [n[0][k], n[1][k], n[2][k]],
+            point: Vec3::new(point[0][k], point[1][k], point[2][k]),
+            distance: distance[k],
+        };
+        emit(k, closest, d2[k]);
+    }
+}
+
+/// Bits of the pairs whose facets are clearly not degenerate: twice the area `|w|` above
+/// `tolerance` times the longest edge squared (and `|w|²` a normal number) with room for any
+/// rounding, so that [`crate::Facet::new`] accepts them. The other lanes are to be decided by it.
+#[inline]
+pub(crate) fn clearly_valid(pairs: &Pairs, tolerance: f64) -> u32 {
+    let load = |v: &[[f64; PAIRS]; 3]| -> [f64x8; 3] { v.map(f64x8::new) };
+    let [a, b, c] = pairs.corners.each_ref().map(load);
+    let (ab, ac, bc) = (sub(&b, &a), sub(&c, &a), sub(&c, &b));
+    let w = [
+        ab[1] * ac[2] - ab[2] * ac[1],
+        ab[2] * ac[0] - ab[0] * ac[2],
+        ab[0] * ac[1] - ab[1] * ac[0],
+    ];
+    let w2 = dot(&w, &w);
+    let longest = dot(&ab, &ab).max(dot(&ac, &ac)).max(dot(&bc, &bc));
+    let floor = longest * longest * f64x8::splat(tolerance * tolerance);
+    let normal = w2.simd_ge(f64x8::splat(4.0 * f64::MIN_POSITIVE))
+        & w2.simd_le(f64x8::splat(0.25 * f64::MAX));
+    (w2.simd_gt(floor) & floor.is_finite() & normal).to_bitmask()
 }
 
 #[cfg(test)]
@@ -129,6 +333,37 @@ mod tests {
         }
     }
 
+    /// Every pair through [`closest_pairs`] against the scalar kernel, bit for bit.
+    fn check_pairs(cases: &[([Vec3; 3], Vec3)]) {
+        for group in cases.chunks(PAIRS) {
+            let mut pairs = Pairs::default();
+            for (k, (c, p)) in group.iter().enumerate() {
+                pairs.set(k, c, p);
+            }
+            let mut out = [None; PAIRS];
+            let live = (1 << group.len()) - 1;
+            closest_pairs(&pairs, live, |k, c, d2| out[k] = Some((c, d2)));
+            for (k, ([a, b, c], p)) in group.iter().enumerate() {
+                let (closest, d2) = closest_point_and_distance_squared(a, b, c, p);
+                let (lc, ld2) = out[k].expect("every live lane emitted");
+                assert_eq!(
+                    ld2.to_bits(),
+                    d2.to_bits(),
+                    "pair {k}: {a:?} {b:?} {c:?} {p:?}"
+                );
+                assert_eq!(lc.feature, closest.feature);
+                assert_eq!(lc.distance.to_bits(), closest.distance.to_bits());
+                for d in 0..3 {
+                    assert_eq!(
+                        lc.barycentric[d].to_bits(),
+                        closest.barycentric[d].to_bits()
+                    );
+                    assert_eq!(lc.point[d].to_bits(), closest.point[d].to_bits());
+                }
+            }
+        }
+    }
+
     #[test]
     fn lanes_equal_the_scalar_kernel_bit_for_bit() {
         let mut r = uniform(17);
@@ -141,7 +376,43 @@ mod tests {
                     check(&corners, &v(2.0 * scale));
                 }
             }
+            let cases: Vec<([Vec3; 3], Vec3)> = (0..4000)
+                .map(|_| ([v(scale), v(scale), v(scale)], v(2.0 * scale)))
+                .collect();
+            check_pairs(&cases);
         }
+    }
+
+    #[test]
+    fn clearly_valid_facets_are_valid() {
+        let mut r = uniform(5);
+        let mut pairs = Pairs::default();
+        let (mut clear, mut valid) = (0, 0);
+        for scale in [1.0, 1e-150, 1e150] {
+            for _ in 0..2000 {
+                let mut v = || Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5) * scale;
+                let (a, b) = (v(), v());
+                // Slivers around the tolerance: c on the line ab moved off it by 10⁻¹⁴…10⁻⁹.
+                let t = 10f64.powf(-14.0 + 5.0 * (v().x / scale + 0.5));
+                let c = a + (b - a) * 0.3 + v() * t;
+                let corners: [[Vec3; 3]; PAIRS] =
+                    std::array::from_fn(|k| if k % 2 == 0 { [a, b, c] } else { [a, b, v()] });
+                for (k, c) in corners.iter().enumerate() {
+                    pairs.set(k, c, &Vec3::zeros());
+                }
+                let bits = clearly_valid(&pairs, 2.0 * crate::DEGENERACY_TOLERANCE);
+                for (k, [a, b, c]) in corners.iter().enumerate() {
+                    let ok = crate::Facet::new(*a, *b, *c).is_ok();
+                    if bits & (1 << k) != 0 {
+                        assert!(ok, "{a:?} {b:?} {c:?}");
+                        clear += 1;
+                    }
+                    valid += usize::from(ok);
+                }
+            }
+        }
+        // Nearly every valid facet is clearly valid: few are left to the exact test.
+        assert!(clear * 10 > valid * 9, "{clear} of {valid}");
     }
 
     #[test]
@@ -155,12 +426,22 @@ mod tests {
             [a, a, c],       // two corners coincide
             [b, b, b],       // a point
         ];
-        let mut points = vec![a, b, c, 0.5 * (a + b), 0.5 * (b + c), (a + b + c) / 3.0];
+        let mut points = vec![
+            a,
+            b,
+            c,
+            0.5 * (a + b),
+            0.5 * (b + c),
+            0.5 * (c + a),
+            (a + b + c) / 3.0,
+        ];
         points.extend(points.clone().iter().map(|p| p + Vec3::new(0.0, 0.0, 0.3)));
         points.extend([Vec3::new(-1.0, -1.0, 0.0), Vec3::new(2.0, 2.0, -1.0)]);
+        let mut cases = Vec::new();
         for p in &points {
             check(&facets, p);
             check(&facets[1..3], p);
+            cases.extend(facets.iter().map(|f| (*f, *p)));
         }
         // Non-finite coordinates go through the scalar kernel's rescaling.
         let huge = [[
@@ -168,6 +449,24 @@ mod tests {
             Vec3::new(f64::MAX, 0.0, 0.0),
             Vec3::new(0.0, f64::MAX, 0.0),
         ]];
-        check(&huge, &Vec3::new(1e300, 1e300, 1.0));
+        let far = Vec3::new(1e300, 1e300, 1.0);
+        check(&huge, &far);
+        cases.push((huge[0], far));
+        // Every feature appears, in every lane position.
+        let features: std::collections::HashSet<_> = cases
+            .iter()
+            .map(|([a, b, c], p)| {
+                format!(
+                    "{:?}",
+                    crate::closest::closest_point_on_triangle(a, b, c, p).feature
+                )
+            })
+            .collect();
+        assert_eq!(features.len(), 7, "{features:?}");
+        for shift in 0..PAIRS {
+            let mut rotated = cases.clone();
+            rotated.rotate_left(shift);
+            check_pairs(&rotated);
+        }
     }
 }

@@ -8,13 +8,15 @@
 //!   optionally from a hint facet; `lanes`: four facets measured at once;
 //! * [`packet`]: coherent batches, a packet of consecutive queries sharing one traversal;
 //! * [`incremental`]: answers again after a small motion from per-query neighbourhood lists, with
-//!   a certificate from the largest motion, and tree fallback.
+//!   a certificate from the motion, and tree fallback; `screen`: its bounds for eight queries at
+//!   once; `direction`: unit vectors in three bytes.
 //!
 //! The search uses the kernel's closest-point query, so each answer says whether the node faces the
 //! interior, an edge or a vertex of its facet.
 
 pub mod aabb;
 pub mod bvh;
+pub(crate) mod direction;
 pub mod incremental;
 pub(crate) mod lanes;
 pub mod layout;
@@ -23,6 +25,7 @@ pub(crate) mod node;
 pub mod packet;
 pub mod query;
 pub mod scenes;
+pub(crate) mod screen;
 pub mod surface;
 
 pub use aabb::Aabb;

@@ -50,6 +50,12 @@ pub enum SurfaceError {
         /// Entries in the answer buffer.
         answers: usize,
     },
+    /// Neighbourhood lists longer than the search's 32-bit offsets.
+    #[error("the neighbourhood lists hold {entries} entries, more than 2³² (use a smaller skin)")]
+    ListsTooLong {
+        /// The number of listed facets.
+        entries: usize,
+    },
     /// A facet names the same node twice.
     #[error("facet {facet} repeats node {node}")]
     RepeatedNode {
