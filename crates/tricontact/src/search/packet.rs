@@ -277,6 +277,10 @@ impl Bvh {
         // The gathered leaf that held the previous answer: measured first, whole, for the bound.
         let mut previous: Option<u32> = None;
         for (q, hit) in queries.iter().zip(hits.iter_mut()) {
+            if !q.is_finite() {
+                *hit = None;
+                continue;
+            }
             let mut best = None;
             match previous {
                 Some(j) => {

@@ -25,6 +25,10 @@
 //! equals the brute-force one exactly and is the same for any number of threads. A node at a
 //! vertex shared by six facets gets the lowest-numbered of them.
 //!
+//! # Points that are not finite
+//! A query at NaN or infinity has no answer (`None`) on every path (single, hinted, in a batch,
+//! brute force, incremental): its distance to every facet is infinite or undefined.
+//!
 //! # Self-contact
 //! A query may name its own node (`exclude`): facets that contain it are skipped, so a node never
 //! pairs with a facet it belongs to.
@@ -79,6 +83,13 @@ impl Query {
             point,
             exclude: None,
         }
+    }
+
+    /// `true` when the query point is finite (a query at NaN or infinity has no answer).
+    #[must_use]
+    #[inline]
+    pub fn is_finite(&self) -> bool {
+        self.point.iter().all(|c| c.is_finite())
     }
 
     /// `true` when the query skips `facet` (it contains the query's own node).
@@ -174,7 +185,7 @@ impl Bvh {
     #[inline]
     pub(crate) fn candidate(&self, surface: &Surface, q: &Query, facet: u32) -> Option<Candidate> {
         let slot = *self.slot.get(facet as usize)?;
-        if slot == NO_SLOT || q.excludes(surface, facet) {
+        if slot == NO_SLOT || q.excludes(surface, facet) || !q.is_finite() {
             return None;
         }
         let c = &self.corners[slot as usize];
@@ -193,6 +204,9 @@ impl Bvh {
         max2: f64,
         seed: Option<Candidate>,
     ) -> Option<Candidate> {
+        if !q.is_finite() {
+            return None;
+        }
         let p = &q.point;
         let mut best = seed.filter(|c| c.d2 <= max2);
         // (child reference, squared distance to its box), in a per-thread buffer reused from query
@@ -269,6 +283,9 @@ impl Bvh {
     #[must_use]
     pub fn within(&self, surface: &Surface, q: &Query, radius: f64) -> Vec<Hit> {
         let mut hits = Vec::new();
+        if !q.is_finite() {
+            return hits;
+        }
         let r2 = radius * radius;
         let bound = r2 * TIE_MARGIN;
         let mut stack = vec![self.root];
@@ -413,6 +430,9 @@ pub fn brute_force_closest(
 ) -> Option<Hit> {
     let max2 = max_distance * max_distance;
     let mut best = None;
+    if !q.is_finite() {
+        return None;
+    }
     for f in 0..surface.len() {
         let facet = index(f);
         let c = surface.corners(facet, positions);
