@@ -19,9 +19,7 @@
 //! positions; the torus is then deformed by a wave and a twist of 0.01, 0.1 and 0.2 element sizes
 //! each (the largest node motion is printed, in element sizes). The incremental search needs no tree;
 //! the full query needs the tree refitted to the new positions, so both ratios are printed: against
-//! the query alone and against refit plus query. After the smallest motion the kernel alone is
-//! timed on each query's answer facet: times the facets the search measured per query, about the
-//! least an exact incremental search can cost, hence about the best speed-up it can show.
+//! the query alone and against refit plus query.
 
 use std::sync::Mutex;
 use std::time::Instant;
@@ -31,9 +29,7 @@ use parry3d_f64::query::PointQuery;
 use parry3d_f64::shape::TriMesh;
 use tricontact::Vec3;
 use tricontact::search::scenes::{self, torus};
-use tricontact::search::{
-    Bvh, Hit, Neighbourhoods, Query, Surface, Update, brute_force_closest, measure,
-};
+use tricontact::search::{Bvh, Hit, Neighbourhoods, Query, Surface, Update, brute_force_closest};
 
 fn near_surface(nodes: &[Vec3], facets: &[[u32; 3]], h: f64) -> Vec<Query> {
     scenes::near_surface(nodes, facets, 2.0 * h, 11)
@@ -266,7 +262,7 @@ fn incremental(
         "neighbourhood lists     {:>9.2} ms per core (skin 0.5 h): {:.1} facets per query, {:.0} MB",
         t_lists * 1e3,
         lists.len() as f64 / nq,
-        lists.len() as f64 * 8e-6
+        lists.bytes() as f64 * 1e-6
     );
     for a in [0.01, 0.1, 0.2] {
         let moved = deformed(nodes, h, a);
@@ -305,16 +301,6 @@ fn incremental(
                 .expect("incremental")
         });
         let answers = own.into_inner().expect("buffer");
-        if a == 0.01 {
-            kernel_floor(
-                surface,
-                &moved,
-                queries,
-                &full,
-                t_full,
-                stats.measured as f64 / nq,
-            );
-        }
         let mismatches = answers.iter().zip(&full).filter(|(a, b)| a != b).count();
         let changed = hits
             .iter()
@@ -334,35 +320,6 @@ fn incremental(
             100.0 * stats.fallbacks as f64 / nq
         );
     }
-}
-
-/// About the least an exact incremental search can cost: the kernel alone on each query's answer
-/// facet at the moved positions (no lists, no certificate, no bookkeeping), answers written as the
-/// search writes them; scaled by the facets the search measured per query (each measured facet
-/// costs a kernel call, only the winner a written answer), it estimates the best speed-up over
-/// the full query (`t_full`, per batch) at that count.
-fn kernel_floor(
-    surface: &Surface,
-    moved: &[Vec3],
-    queries: &[Query],
-    full: &[Option<Hit>],
-    t_full: f64,
-    measured: f64,
-) {
-    let facets: Vec<u32> = full.iter().map(|h| h.map_or(0, |h| h.facet)).collect();
-    let out = Mutex::new(vec![None; queries.len()]);
-    let (t, ()) = time_one_core(3, || {
-        let mut out = out.lock().expect("buffer");
-        for ((q, &f), hit) in queries.iter().zip(&facets).zip(out.iter_mut()) {
-            *hit = measure(surface, moved, f, q);
-        }
-    });
-    let per = t * 1e9 / queries.len() as f64;
-    println!(
-        "   kernel alone on each answer's facet: {per:.1} ns per query; × {measured:.2} facets measured = {:.1} ns, {:.1}× the full query (about the most an exact search measuring as many facets can reach)",
-        per * measured,
-        t_full / (t * measured)
-    );
 }
 
 fn main() {

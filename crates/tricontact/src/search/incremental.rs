@@ -301,6 +301,15 @@ impl Neighbourhoods {
         self.entries.len() + self.heads.iter().map(near).sum::<usize>()
     }
 
+    /// The memory the lists take, in bytes (query records, further entries, reference positions).
+    #[must_use]
+    pub fn bytes(&self) -> usize {
+        self.heads.len() * std::mem::size_of::<Head>()
+            + self.entries.len() * std::mem::size_of::<Entry>()
+            + self.reference.len() * std::mem::size_of::<Vec3>()
+            + self.degenerate.len() * 4
+    }
+
     /// `true` when no query lists any facet.
     #[must_use]
     pub fn is_empty(&self) -> bool {
