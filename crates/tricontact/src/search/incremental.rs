@@ -226,44 +226,36 @@ impl Neighbourhoods {
         skin: f64,
     ) -> Result<Self, SurfaceError> {
         surface.check_positions(positions)?;
-        // Chunks in parallel, each query hinted with the previous one's closest facet.
-        let lists: Vec<(f64, Vec<(f64, u32)>)> = queries
+        // Chunks in parallel, each query hinted with the previous one's closest facet: its record
+        // (without where its further entries start), those entries, and its facets' robustness.
+        let lists: Vec<(Head, Vec<Entry>, f64)> = queries
             .par_chunks(HINT_CHUNK)
             .flat_map_iter(|chunk| {
                 let mut hint = None;
                 chunk.iter().map(move |q| {
                     let (reach, list) = bvh.neighbourhood(surface, q, hint, skin);
                     hint = list.first().map(|&(_, f)| f).or(hint);
-                    (reach, list)
+                    let robust = list
+                        .iter()
+                        .map(|&(_, f)| robustness(&surface.corners(f, positions)))
+                        .fold(f64::INFINITY, f64::min);
+                    let (head, rest) = record(surface, positions, q, reach, &list);
+                    (head, rest, robust)
                 })
             })
             .collect();
-        let total: usize = lists.iter().map(|(_, l)| l.len()).sum();
-        let too_long = || SurfaceError::ListsTooLong { entries: total };
-        let mut entries = Vec::with_capacity(total.saturating_sub((1 + NEAR) * queries.len()));
+        let total: usize = lists.iter().map(|(_, rest, _)| rest.len()).sum();
+        let too_long = || SurfaceError::ListsTooLong {
+            entries: total + (1 + NEAR) * queries.len(),
+        };
+        let mut entries = Vec::with_capacity(total);
         let mut heads = Vec::with_capacity(queries.len() + 1);
-        for (q, (reach, list)) in queries.iter().zip(&lists) {
-            let first = list.first().map_or(0, |&(_, f)| f);
-            let empty = Entry {
-                facet: first,
-                distance: f32::INFINITY,
-                direction: Direction::ZERO,
-            };
-            let entry = |k: usize| {
-                list.get(k)
-                    .map_or(empty, |&(d2, f)| entry(surface, positions, q, f, d2))
-            };
-            heads.push(Head {
-                point: q.point,
-                reach: round_down(*reach),
-                facet: list.first().map_or(NONE, |&(_, f)| f),
-                near: std::array::from_fn(|k| entry(1 + k)),
-                after: list
-                    .get(1 + NEAR)
-                    .map_or(f32::INFINITY, |&(d2, _)| round_down(d2.sqrt())),
-                start: u32::try_from(entries.len()).map_err(|_| too_long())?,
-            });
-            entries.extend((1 + NEAR..list.len()).map(entry));
+        let mut robust = f64::INFINITY;
+        for (mut head, rest, r) in lists {
+            head.start = u32::try_from(entries.len()).map_err(|_| too_long())?;
+            heads.push(head);
+            entries.extend_from_slice(&rest);
+            robust = robust.min(r);
         }
         let empty = Entry {
             facet: 0,
@@ -278,11 +270,6 @@ impl Neighbourhoods {
             after: f32::INFINITY,
             start: u32::try_from(entries.len()).map_err(|_| too_long())?,
         });
-        let robust = lists
-            .par_iter()
-            .flat_map_iter(|(_, l)| l.iter().map(|&(_, f)| f))
-            .map(|f| robustness(&surface.corners(f, positions)))
-            .reduce(|| f64::INFINITY, f64::min);
         Ok(Self {
             reference: positions[..surface.node_count()].to_vec(),
             heads,
@@ -736,6 +723,38 @@ impl Neighbourhoods {
         }
         (Ok(()), measured)
     }
+}
+
+/// The record of query `q` whose list (facets by increasing squared distance, at `positions`) has
+/// the reach `reach`, with `start` zero, and its entries after the record's.
+fn record(
+    surface: &Surface,
+    positions: &[Vec3],
+    q: &Query,
+    reach: f64,
+    list: &[(f64, u32)],
+) -> (Head, Vec<Entry>) {
+    let first = list.first().map_or(0, |&(_, f)| f);
+    let empty = Entry {
+        facet: first,
+        distance: f32::INFINITY,
+        direction: Direction::ZERO,
+    };
+    let entry = |k: usize| {
+        list.get(k)
+            .map_or(empty, |&(d2, f)| entry(surface, positions, q, f, d2))
+    };
+    let head = Head {
+        point: q.point,
+        reach: round_down(reach),
+        facet: list.first().map_or(NONE, |&(_, f)| f),
+        near: std::array::from_fn(|k| entry(1 + k)),
+        after: list
+            .get(1 + NEAR)
+            .map_or(f32::INFINITY, |&(d2, _)| round_down(d2.sqrt())),
+        start: 0,
+    };
+    (head, (1 + NEAR..list.len()).map(entry).collect())
 }
 
 /// The list entry of `facet` for query `q` at `positions`, `d2` its squared distance from the tree.
