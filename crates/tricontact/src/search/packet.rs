@@ -46,7 +46,7 @@ use std::cell::RefCell;
 
 use rayon::prelude::*;
 
-use wide::f64x4;
+use wide::{f64x4, u64x4};
 
 use crate::linalg::Vec3;
 use crate::search::aabb::Aabb;
@@ -77,6 +77,33 @@ const ORDER_SAMPLES: usize = 255;
 /// A batch whose median step between consecutive queries exceeds this many leaf sizes is answered
 /// in Z-order.
 const ORDER_SPREAD: f64 = 8.0;
+
+/// For each four-bit mask, the lanes it keeps first (in order), then the others: the permutation
+/// that compacts a block of four.
+const COMPACT: [[u64; 4]; 16] = {
+    let mut table = [[0u64; 4]; 16];
+    let mut mask = 0;
+    while mask < 16 {
+        let (mut at, mut lane) = (0, 0);
+        while lane < 4 {
+            if mask & (1 << lane) != 0 {
+                table[mask][at] = lane as u64;
+                at += 1;
+            }
+            lane += 1;
+        }
+        lane = 0;
+        while lane < 4 {
+            if mask & (1 << lane) == 0 {
+                table[mask][at] = lane as u64;
+                at += 1;
+            }
+            lane += 1;
+        }
+        mask += 1;
+    }
+    table
+};
 
 /// The leaves gathered for a packet: boxes axis by axis, and leaf references (fixed capacity,
 /// [`MAX_LEAVES`], so a gathering allocates nothing).
@@ -147,12 +174,16 @@ impl Gathered {
             // Lanes past the end hold stale boxes: masked off.
             let live = (1u32 << (n - 4 * block).min(4)) - 1;
             let mask = d.simd_le(f64x4::splat(bound)).to_bitmask() & live;
-            // Branch-free compaction: every lane is written, the count advances for kept lanes.
-            for (k, &dk) in d.as_array().iter().enumerate() {
-                self.d2[kept] = dk;
-                self.index[kept] = index(4 * block + k);
-                kept += ((mask >> k) & 1) as usize;
-            }
+            // Compaction without branches: the kept lanes moved to the front by one permutation
+            // (a table by mask), all four written, the count advanced by the number kept.
+            let order = COMPACT[mask as usize];
+            let kept_d = d.shuffle(u64x4::new(order));
+            self.d2[kept..kept + 4].copy_from_slice(kept_d.as_array());
+            let base = index(4 * block);
+            #[allow(clippy::cast_possible_truncation)]
+            let kept_index = order.map(|k| base + k as u32);
+            self.index[kept..kept + 4].copy_from_slice(&kept_index);
+            kept += mask.count_ones() as usize;
         }
         kept
     }
