@@ -10,7 +10,9 @@
 //! to ±2 element sizes along its normal. "Coherent" queries come in facet order (neighbours in
 //! space are neighbours in the list); "random" queries are shuffled. Per-core figures are the CPU
 //! time of a one-thread pool (so they hold on a shared machine), the best of three batches of at
-//! least 0.3 s; brute force is timed on a subset of queries and its ratio is per query (measured
+//! least 0.3 s; the two sides of a ratio (ours and parry's, the full query and the incremental
+//! search) are measured in alternating batches, so that the machine's drift does not fall between
+//! them; brute force is timed on a subset of queries and its ratio is per query (measured
 //! per query on the subset, not extrapolated from a model). Two-thread figures are wall-clock. Answers (ours and parry's) are written into
 //! buffers made once, as a solver searching at every iteration would: allocating a fresh buffer
 //! of 10⁶ answers costs about 50 ns per answer in page faults, as much as a search.
@@ -73,31 +75,64 @@ fn thread_cpu_time() -> Option<f64> {
     Some(ns * 1e-9)
 }
 
-/// CPU time per call of `f` on a one-thread pool, in seconds, the best of `reps` batches: each
-/// batch repeats `f` until at least 0.3 s of CPU time has passed (the kernel's per-thread clock
-/// advances in scheduler ticks), so per-core figures stay meaningful when other processes share
-/// the machine, and the best batch discounts a disturbed one. Falls back to wall-clock time where
-/// the per-thread clock is missing. Returns the last result too.
+/// One batch: repeats `f` until at least 0.3 s of CPU time (the calling thread's; wall-clock
+/// where the per-thread clock is missing, and at most 10 s of wall-clock time) has passed;
+/// returns the time per call and the last result.
+fn batch<T>(f: &impl Fn() -> T) -> (f64, T) {
+    let (c0, t0) = (thread_cpu_time(), Instant::now());
+    let mut calls = 0u32;
+    loop {
+        let last = f();
+        calls += 1;
+        let wall = t0.elapsed().as_secs_f64();
+        let cpu = c0.and_then(|c0| thread_cpu_time().map(|c1| c1 - c0));
+        let spent = cpu.unwrap_or(wall);
+        if spent >= 0.3 || wall >= 10.0 {
+            return (spent / f64::from(calls), last);
+        }
+    }
+}
+
+/// CPU time per call of `f` on a one-thread pool, in seconds, the best of `reps` batches (see
+/// [`batch`]): per-core figures stay meaningful when other processes share the machine, and the
+/// best batch discounts a disturbed one. Returns the last result too.
 fn time_one_core<T: Send>(reps: usize, f: impl Fn() -> T + Sync) -> (f64, T) {
     pool(1).install(|| {
         let mut best = f64::INFINITY;
         let mut last = None;
         for _ in 0..reps.max(1) {
-            let (c0, t0) = (thread_cpu_time(), Instant::now());
-            let mut calls = 0u32;
-            loop {
-                last = Some(f());
-                calls += 1;
-                let wall = t0.elapsed().as_secs_f64();
-                let cpu = c0.and_then(|c0| thread_cpu_time().map(|c1| c1 - c0));
-                let spent = cpu.unwrap_or(wall);
-                if spent >= 0.3 || wall >= 10.0 {
-                    best = best.min(spent / f64::from(calls));
-                    break;
-                }
-            }
+            let (t, v) = batch(&f);
+            best = best.min(t);
+            last = Some(v);
         }
         (best, last.expect("at least one call"))
+    })
+}
+
+/// [`time_one_core`] for two functions whose times are compared, their batches alternated
+/// (`f`, `g`, `f`, `g`, …) so that a ratio is measured under the same conditions: this machine's
+/// speed drifts by tens of per cent over minutes. The best of each, and the last results.
+fn time_pair_one_core<T: Send, U: Send>(
+    reps: usize,
+    f: impl Fn() -> T + Sync,
+    g: impl Fn() -> U + Sync,
+) -> ((f64, T), (f64, U)) {
+    pool(1).install(|| {
+        let (mut best_f, mut best_g) = (f64::INFINITY, f64::INFINITY);
+        let (mut last_f, mut last_g) = (None, None);
+        for _ in 0..reps.max(1) {
+            let (t, v) = batch(&f);
+            best_f = best_f.min(t);
+            last_f = Some(v);
+            let (t, v) = batch(&g);
+            best_g = best_g.min(t);
+            last_g = Some(v);
+        }
+        let at_least_one = "at least one call";
+        (
+            (best_f, last_f.expect(at_least_one)),
+            (best_g, last_g.expect(at_least_one)),
+        )
     })
 }
 
@@ -191,12 +226,18 @@ fn scene(nu: u32, nv: u32) {
         TriMesh::new(pv.clone(), facets.clone()).expect("parry trimesh")
     });
     let projections = Mutex::new(vec![None; queries.len()]);
-    let (t_parry, ()) = time_one_core(3, || {
-        let mut out = projections.lock().expect("buffer");
-        for (p, q) in out.iter_mut().zip(&queries) {
-            *p = Some(mesh.project_local_point(PVec::new(q.point.x, q.point.y, q.point.z), false));
-        }
-    });
+    // Ours and parry's batches alternated, for the ratio.
+    let ((t_ours, ()), (t_parry, ())) = time_pair_one_core(
+        3,
+        || into(&queries),
+        || {
+            let mut out = projections.lock().expect("buffer");
+            for (p, q) in out.iter_mut().zip(&queries) {
+                let point = PVec::new(q.point.x, q.point.y, q.point.z);
+                *p = Some(mesh.project_local_point(point, false));
+            }
+        },
+    );
     let proj: Vec<_> = projections
         .into_inner()
         .expect("buffer")
@@ -217,7 +258,7 @@ fn scene(nu: u32, nv: u32) {
         t_pbuild * 1e3,
         t_parry * 1e3,
         nq / t_parry / 1e6,
-        t_parry / t_coh
+        t_parry / t_ours
     );
 
     incremental(&surface, &nodes, &queries, bvh, h, &hits);
@@ -276,30 +317,34 @@ fn incremental(
         assert_eq!(kind, Update::Refit);
         let refitted = tree.lock().expect("tree").clone();
         let buffer = Mutex::new(vec![None; queries.len()]);
-        let (t_full, ()) = time_one_core(3, || {
-            let mut out = buffer.lock().expect("buffer");
-            refitted
-                .closest_all_into(surface, queries, inf, &mut out)
-                .expect("one answer per query");
-        });
-        let full = buffer.lock().expect("buffer").clone();
         // A fallback updates the tree (each call: the update refits it again). A buffer of its own,
         // starting empty, so an answer the incremental search failed to write would show below.
         let stale = Mutex::new(bvh.clone());
         let own = Mutex::new(vec![None; queries.len()]);
-        let (t_inc, stats) = time_one_core(3, || {
-            let mut out = own.lock().expect("buffer");
-            lists
-                .closest_all_into(
-                    &mut stale.lock().expect("tree"),
-                    surface,
-                    &moved,
-                    queries,
-                    inf,
-                    &mut out,
-                )
-                .expect("incremental")
-        });
+        // The full query's and the incremental search's batches alternated, for the ratio.
+        let ((t_full, ()), (t_inc, stats)) = time_pair_one_core(
+            3,
+            || {
+                let mut out = buffer.lock().expect("buffer");
+                refitted
+                    .closest_all_into(surface, queries, inf, &mut out)
+                    .expect("one answer per query");
+            },
+            || {
+                let mut out = own.lock().expect("buffer");
+                lists
+                    .closest_all_into(
+                        &mut stale.lock().expect("tree"),
+                        surface,
+                        &moved,
+                        queries,
+                        inf,
+                        &mut out,
+                    )
+                    .expect("incremental")
+            },
+        );
+        let full = buffer.lock().expect("buffer").clone();
         let answers = own.into_inner().expect("buffer");
         let mismatches = answers.iter().zip(&full).filter(|(a, b)| a != b).count();
         let changed = hits

@@ -65,6 +65,7 @@
 //! every query measures those that are valid now.
 
 use rayon::prelude::*;
+use wide::f64x8;
 
 use crate::closest::{ClosestPoint, closest_point_and_distance_squared};
 use crate::facet::{DEGENERACY_TOLERANCE, Facet};
@@ -484,7 +485,7 @@ impl Neighbourhoods {
             }
             let mut d2 = [0.0; PAIRS];
             let mut distance = [0.0; PAIRS];
-            lanes::closest_pairs(&pairs, live, |k, closest, d| {
+            let lanes_distance = lanes::closest_pairs(&pairs, live, |k, closest, d| {
                 d2[k] = d;
                 distance[k] = closest.distance;
                 hits[g + k] = Some(Hit {
@@ -497,7 +498,8 @@ impl Neighbourhoods {
             } else {
                 lanes::clearly_valid(&pairs, 2.0 * DEGENERACY_TOLERANCE) & live
             };
-            let screen = stage.screen(&pairs.points, &distance, limits);
+            let b = lanes_distance.unwrap_or_else(|| f64x8::new(distance));
+            let screen = stage.screen(&pairs.points, b, limits);
             let screenable = if shared.valid.is_empty() { live } else { 0 };
             // Certified at once: the usual case.
             let done = screenable

@@ -251,19 +251,29 @@ const FEATURES: [Feature; 7] = [
 /// The closest point and squared distance of each pair `k` whose bit is set in `live`, bit for
 /// bit those of [`closest_point_and_distance_squared`], handed to `emit(k, closest, d2)` (so a
 /// caller writes them where they belong, without an intermediate array).
+///
+/// Returns the distances of all lanes as a vector (for a caller that goes on in lanes), exact
+/// where the lanes needed no scalar fallback (`None` when some did).
 #[inline]
 pub(crate) fn closest_pairs(
     pairs: &Pairs,
     live: u32,
     mut emit: impl FnMut(usize, ClosestPoint, f64),
-) {
-    let load = |v: &[[f64; PAIRS]; 3]| -> [f64x8; 3] { v.map(f64x8::new) };
-    let [a, b, c] = pairs.corners.each_ref().map(load);
+) -> Option<f64x8> {
+    let load = |v: &[[f64; PAIRS]; 3]| -> [f64x8; 3] {
+        [f64x8::new(v[0]), f64x8::new(v[1]), f64x8::new(v[2])]
+    };
+    let (a, b, c) = (
+        load(&pairs.corners[0]),
+        load(&pairs.corners[1]),
+        load(&pairs.corners[2]),
+    );
     let r = region(&a, &b, &c, &load(&pairs.points));
+    let distance_lanes = r.d2.sqrt();
     let n = r.n.map(f64x8::to_array);
     let point = r.point.map(f64x8::to_array);
     let d2 = r.d2.to_array();
-    let distance = r.d2.sqrt().to_array();
+    let distance = distance_lanes.to_array();
     // The feature of each lane, as a number: the first mask set in priority order (vertices 0, 1,
     // 2, edges 3, 4, 5), 6 for the face.
     let mut code = f64x8::splat(6.0);
@@ -292,6 +302,7 @@ pub(crate) fn closest_pairs(
         };
         emit(k, closest, d2[k]);
     }
+    (r.bad & live == 0).then_some(distance_lanes)
 }
 
 /// Bits of the pairs whose facets are clearly not degenerate: twice the area `|w|` above

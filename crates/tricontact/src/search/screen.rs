@@ -85,16 +85,11 @@ impl Stage {
     }
 
     /// Screens the lanes whose query points are `p` (coordinate by coordinate) and whose first
-    /// listed facet is at distance `b` now.
+    /// listed facets are at the distances `b` now.
     #[inline]
-    pub(crate) fn screen(
-        &self,
-        p: &[[f64; PAIRS]; 3],
-        b: &[f64; PAIRS],
-        limits: Limits,
-    ) -> Outcome {
+    pub(crate) fn screen(&self, p: &[[f64; PAIRS]; 3], b: f64x8, limits: Limits) -> Outcome {
         let w = |a: &[f64; PAIRS]| f64x8::new(*a);
-        let (b, zero) = (w(b), f64x8::ZERO);
+        let zero = f64x8::ZERO;
         let p = [w(&p[0]), w(&p[1]), w(&p[2])];
         let p0 = [w(&self.point[0]), w(&self.point[1]), w(&self.point[2])];
         let dp = [p[0] - p0[0], p[1] - p0[1], p[2] - p0[2]];
