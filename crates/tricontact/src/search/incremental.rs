@@ -44,8 +44,10 @@
 //! Queries go in chunks of 256 (in parallel); within a chunk, eight at a time, their first
 //! listed facets are measured together (`search::lanes`) and written as the answers, and
 //! each query is screened: every facet the bounds cannot exclude is put aside (all exclusions are
-//! against the first facet's distance; measuring others can only lower it). The facets put aside
-//! are then measured eight at a time, and a better one replaces the answer. A query whose first
+//! against the first facet's distance; measuring others can only lower it). The queries whose
+//! lists must be walked beyond the record then walk them, their first further entries read all
+//! together so that their fetches from memory overlap. The facets put aside are then measured eight
+//! at a time, and a better one replaces the answer. A query whose first
 //! listed facet is missing (empty list, or excluded by the query) goes through the same tests one
 //! facet at a time; a query at NaN or infinity has no answer, as in the tree.
 //!
@@ -443,9 +445,11 @@ impl Neighbourhoods {
         let mut fallbacks = Vec::new();
         let mut pairs = Pairs::default();
         let mut stage = Stage::default();
-        // The queries with facets put aside, and the (query in `open`, facet) pairs.
+        // The queries with facets put aside, the (query in `open`, facet) pairs, and the queries
+        // in `open` (with their first facet's distance) whose lists are to be walked further.
         let mut open: Vec<Open> = Vec::new();
         let mut aside: Vec<(u32, u32)> = Vec::new();
+        let mut walks: Vec<(u32, f64)> = Vec::new();
         let limits = Limits {
             delta: shared.delta,
             max_distance: shared.max2.sqrt(),
@@ -552,24 +556,13 @@ impl Neighbourhoods {
                         put(e.facet);
                     }
                 }
-                if screen.later & bit == 0 {
-                    // The rest of the list, one entry at a time, until the Lipschitz bound
-                    // excludes all that follow.
-                    let bounds = self.bounds(i, &q.point, shared);
-                    let b = distance[k];
-                    let (a, z) = (h.start as usize, self.heads[i + 1].start as usize);
-                    for e in &self.entries[a..z] {
-                        if f64::from(e.distance) - bounds.m > b + bounds.tol {
-                            break;
-                        }
-                        if !self.excluded(e, &bounds, shared, b) {
-                            put(e.facet);
-                        }
-                    }
-                }
+                let walk = screen.later & bit == 0;
                 measured += 1 + aside.len() - before;
                 let unlisted = screen.unlisted & bit != 0;
-                if aside.len() > before {
+                if aside.len() > before || walk {
+                    if walk {
+                        walks.push((o, distance[k]));
+                    }
                     open.push(Open {
                         place: index(c),
                         d2: d2[k],
@@ -587,6 +580,7 @@ impl Neighbourhoods {
                 }
             }
         }
+        measured += self.walk(first, queries, shared, &walks, &open, &mut aside);
         self.measure_aside(queries, shared, &aside, &mut open, hits);
         for o in &open {
             let c = o.place as usize;
@@ -600,6 +594,50 @@ impl Neighbourhoods {
             }
         }
         (measured, fallbacks)
+    }
+
+    /// Walks the rest of the lists of the queries `walks` (their places in `open`, and their first
+    /// facets' distances), one entry at a time until the Lipschitz bound excludes all that follow,
+    /// putting aside the facets the first-order bound does not exclude; returns how many. The
+    /// first entry of every walk is read first, all together, so that their fetches from memory
+    /// overlap (one by one, each walk waited for its own).
+    fn walk(
+        &self,
+        first: usize,
+        queries: &[Query],
+        shared: &Shared<'_>,
+        walks: &[(u32, f64)],
+        open: &[Open],
+        aside: &mut Vec<(u32, u32)>,
+    ) -> usize {
+        let rest = |o: u32| {
+            let i = first + open[o as usize].place as usize;
+            let (a, z) = (
+                self.heads[i].start as usize,
+                self.heads[i + 1].start as usize,
+            );
+            (i, &self.entries[a..z])
+        };
+        let touched: f32 = walks
+            .iter()
+            .map(|&(o, _)| rest(o).1.first().map_or(0.0, |e| e.distance))
+            .fold(0.0, |s, d| s + d);
+        std::hint::black_box(touched);
+        let before = aside.len();
+        for &(o, b) in walks {
+            let (i, entries) = rest(o);
+            let q = &queries[i - first];
+            let bounds = self.bounds(i, &q.point, shared);
+            for e in entries {
+                if f64::from(e.distance) - bounds.m > b + bounds.tol {
+                    break;
+                }
+                if !self.excluded(e, &bounds, shared, b) && !q.excludes(shared.surface, e.facet) {
+                    aside.push((o, e.facet));
+                }
+            }
+        }
+        aside.len() - before
     }
 
     /// Measures the (query, facet) pairs put aside, eight at a time, each against its query's best
