@@ -115,8 +115,8 @@ struct Gathered {
     /// Per-query scratch: the gathered leaves within a query's bound and their squared distances.
     d2: [f64; MAX_LEAVES + 4],
     index: [u32; MAX_LEAVES + 4],
-    /// Traversal stack of the gathering.
-    stack: Vec<Child>,
+    /// The nodes the gathering visits, level after level.
+    nodes: Vec<Child>,
 }
 
 /// One coordinate of every gathered box, four lanes at a time.
@@ -131,7 +131,7 @@ impl Default for Gathered {
             len: 0,
             d2: [0.0; MAX_LEAVES + 4],
             index: [0; MAX_LEAVES + 4],
-            stack: Vec::new(),
+            nodes: Vec::new(),
         }
     }
 }
@@ -139,7 +139,7 @@ impl Default for Gathered {
 impl Gathered {
     fn clear(&mut self) {
         self.len = 0;
-        self.stack.clear();
+        self.nodes.clear();
     }
 
     /// Appends a leaf; `false` when [`MAX_LEAVES`] are gathered already.
@@ -272,23 +272,31 @@ impl Bvh {
         if as_leaf(self.root).is_some() {
             return false;
         }
-        g.stack.push(self.root);
-        while let Some(child) = g.stack.pop() {
-            let node = &self.nodes[child as usize];
-            let d = node.child_distances_squared_to_box(&b);
-            for (k, &c) in node.child.iter().enumerate() {
-                if !(d[k] <= bound && d[k] < f64::INFINITY) {
-                    continue;
-                }
-                match as_leaf(c) {
-                    Some((first, count)) => {
-                        if !g.push(&node.child_box(k), first, count) {
-                            return false;
-                        }
+        // Level by level (the accepted internal children of one level are the next): the nodes
+        // of a level do not depend on one another, so their loads from memory overlap, where a
+        // depth-first walk waits for each node before it knows the next.
+        g.nodes.push(self.root);
+        let mut level = 0;
+        while level < g.nodes.len() {
+            let end = g.nodes.len();
+            for at in level..end {
+                let node = &self.nodes[g.nodes[at] as usize];
+                let d = node.child_distances_squared_to_box(&b);
+                for (k, &c) in node.child.iter().enumerate() {
+                    if !(d[k] <= bound && d[k] < f64::INFINITY) {
+                        continue;
                     }
-                    None => g.stack.push(c),
+                    match as_leaf(c) {
+                        Some((first, count)) => {
+                            if !g.push(&node.child_box(k), first, count) {
+                                return false;
+                            }
+                        }
+                        None => g.nodes.push(c),
+                    }
                 }
             }
+            level = end;
         }
         true
     }
