@@ -180,7 +180,7 @@ pub(crate) fn region<L: Lane>(a: &[L; 3], b: &[L; 3], c: &[L; 3], pl: &[L; 3]) -
 
 /// Squared distances from `p` to the facets `corners[..]` (one to four of them); lanes beyond
 /// `corners.len()` repeat the last facet.
-#[inline]
+#[inline(always)]
 pub(crate) fn distances_squared(corners: &[[Vec3; 3]], p: &Vec3) -> V {
     debug_assert!((1..=LANES).contains(&corners.len()));
     let last = corners.len() - 1;
