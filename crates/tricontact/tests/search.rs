@@ -676,6 +676,34 @@ fn incremental_matches_tree(
     stats
 }
 
+/// A torus (`around` × `tube` cells, radii `major`, `minor`), query points scattered near its
+/// surface, and the lists built for them with a margin of half an element.
+struct ListedTorus {
+    nodes: Vec<Vec3>,
+    surface: Surface,
+    bvh: Bvh,
+    queries: Vec<Query>,
+    lists: Neighbourhoods,
+    h: f64,
+}
+
+fn listed_torus(around: u32, tube: u32, major: f64, minor: f64, seed: u64) -> ListedTorus {
+    let (nodes, facets) = torus(around, tube, major, minor);
+    let h = std::f64::consts::TAU * minor / f64::from(tube);
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    let queries = near_surface(&nodes, &surface, seed, h);
+    let lists = Neighbourhoods::new(&bvh, &surface, &nodes, &queries, 0.5 * h).unwrap();
+    ListedTorus {
+        nodes,
+        surface,
+        bvh,
+        queries,
+        lists,
+        h,
+    }
+}
+
 /// Rigid motions of the whole torus (a translation, a rotation about its axis), with the query
 /// points fixed or carried along: the first-order bound excludes the neighbouring facets that the
 /// Lipschitz bound `d₀(f) − m` cannot, so the search measures little more than one facet per query
@@ -683,12 +711,14 @@ fn incremental_matches_tree(
 /// same lists measure 2.5 facets per query after the translation.
 #[test]
 fn rigid_motions_are_certified_by_the_first_listed_facet() {
-    let (nodes, facets) = torus(120, 60, 3.0, 1.0);
-    let h = std::f64::consts::TAU / 60.0;
-    let surface = Surface::new(facets, nodes.len()).unwrap();
-    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
-    let queries = near_surface(&nodes, &surface, 3, h);
-    let lists = Neighbourhoods::new(&bvh, &surface, &nodes, &queries, 0.5 * h).unwrap();
+    let ListedTorus {
+        nodes,
+        surface,
+        queries,
+        lists,
+        h,
+        ..
+    } = listed_torus(120, 60, 3.0, 1.0, 3);
     let shift = Vec3::new(0.02 * h, -0.01 * h, 0.015 * h);
     let angle = 0.02 * h / 4.0;
     let rotate = |p: &Vec3| {
@@ -725,12 +755,14 @@ fn rigid_motions_are_certified_by_the_first_listed_facet() {
 /// measures more, and every answer is still the tree's.
 #[test]
 fn jittered_nodes_keep_the_incremental_search_exact() {
-    let (nodes, facets) = torus(60, 30, 2.0, 0.6);
-    let h = std::f64::consts::TAU * 0.6 / 30.0;
-    let surface = Surface::new(facets, nodes.len()).unwrap();
-    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
-    let queries = near_surface(&nodes, &surface, 9, h);
-    let lists = Neighbourhoods::new(&bvh, &surface, &nodes, &queries, 0.5 * h).unwrap();
+    let ListedTorus {
+        nodes,
+        surface,
+        queries,
+        lists,
+        h,
+        ..
+    } = listed_torus(60, 30, 2.0, 0.6, 9);
     for (seed, amplitude) in [(1, 0.01), (2, 0.03), (3, 0.1)] {
         let mut r = scenes::uniform(seed);
         let mut jitter = || amplitude * h * (2.0 * r() - 1.0);
@@ -754,12 +786,14 @@ fn jittered_nodes_keep_the_incremental_search_exact() {
 /// at NaN or infinity gets the tree's answer too, and the others are unchanged.
 #[test]
 fn non_finite_positions_and_queries_in_the_incremental_search() {
-    let (nodes, facets) = torus(40, 20, 2.0, 0.6);
-    let h = std::f64::consts::TAU * 0.6 / 20.0;
-    let surface = Surface::new(facets, nodes.len()).unwrap();
-    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
-    let queries = near_surface(&nodes, &surface, 4, h);
-    let lists = Neighbourhoods::new(&bvh, &surface, &nodes, &queries, 0.5 * h).unwrap();
+    let ListedTorus {
+        nodes,
+        surface,
+        bvh,
+        queries,
+        lists,
+        ..
+    } = listed_torus(40, 20, 2.0, 0.6, 4);
     let mut moved = nodes.clone();
     moved[7].y = f64::NAN;
     assert!(lists.motion(&moved).is_nan());
