@@ -817,5 +817,6 @@ fn non_finite_positions_and_queries_in_the_incremental_search() {
             brute_force_closest(&surface, &nodes, &odd[k], f64::INFINITY),
             None
         );
+        assert!(bvh.within(&surface, &odd[k], f64::INFINITY).is_empty());
     }
 }

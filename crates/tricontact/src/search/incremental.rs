@@ -73,20 +73,17 @@ use crate::closest::{ClosestPoint, closest_point_and_distance_squared};
 use crate::facet::{DEGENERACY_TOLERANCE, Facet};
 use crate::linalg::Vec3;
 use crate::search::bvh::{Bvh, Update};
-use crate::search::direction::{DIRECTION_ERROR, Direction};
+use crate::search::direction::Direction;
 use crate::search::lanes::{self, PAIRS, Pairs};
 use crate::search::layout::index;
 use crate::search::node::{as_leaf, round_down};
 use crate::search::query::{HINT_CHUNK, TIE_MARGIN, check_answers, farthest_first};
 use crate::search::query::{Hit, Query};
-use crate::search::screen::{Limits, Listed, NEAR, Stage};
+use crate::search::screen::{Bounds, Limits, Listed, NEAR, Stage};
 use crate::search::surface::{Surface, SurfaceError};
 
-/// Relative margin of the certificate, on the magnitude of the coordinates and distances.
-const MARGIN: f64 = 1e-9;
-
 /// Below this distance, relative to the magnitude of the coordinates, a listed facet's direction
-/// is not stored (zero): its rounding error could exceed [`DIRECTION_ERROR`].
+/// is not stored (zero): its rounding error could exceed [`DIRECTION_ERROR`](crate::search::direction::DIRECTION_ERROR).
 const DIRECTION_FLOOR: f64 = 1e-6;
 
 /// Queries answered in one sequential run of [`Neighbourhoods::closest_all_into`].
@@ -191,13 +188,6 @@ struct Shared<'a> {
     /// `true` when no listed facet can have become degenerate (the motion is below the lists'
     /// robustness).
     sound: bool,
-}
-
-/// A query's motion `p − p₀`, `m` of the Lipschitz bound, and the margin `tol` on distances.
-struct Bounds {
-    dp: Vec3,
-    m: f64,
-    tol: f64,
 }
 
 /// A query of a chunk with facets put aside: its place in the chunk, its best (squared distance,
@@ -453,7 +443,6 @@ impl Neighbourhoods {
         let limits = Limits {
             delta: shared.delta,
             max_distance: shared.max2.sqrt(),
-            margin: MARGIN,
         };
         let facets = shared.surface.facets();
         let positions = shared.positions;
@@ -474,16 +463,10 @@ impl Neighbourhoods {
                     positions[c as usize],
                 ];
                 pairs.set(k, &corners, &q.point);
-                let listed = |e: &Entry| {
-                    let moved = self.moved_of(shared, e.facet);
-                    Listed {
-                        distance: f64::from(e.distance),
-                        direction: e.direction.decode(),
-                        translation: moved.translation,
-                        spread: moved.spread,
-                    }
-                };
-                let near = [listed(&h.near[0]), listed(&h.near[1])];
+                let near = [
+                    self.listed(shared, &h.near[0]),
+                    self.listed(shared, &h.near[1]),
+                ];
                 stage.set(k, &h.point, (f64::from(h.reach), f64::from(h.after)), &near);
                 live |= 1 << k;
             }
@@ -629,10 +612,11 @@ impl Neighbourhoods {
             let q = &queries[i - first];
             let bounds = self.bounds(i, &q.point, shared);
             for e in entries {
-                if f64::from(e.distance) - bounds.m > b + bounds.tol {
+                if bounds.beyond(f64::from(e.distance), b) {
                     break;
                 }
-                if !self.excluded(e, &bounds, shared, b) && !q.excludes(shared.surface, e.facet) {
+                let excluded = bounds.excludes(&self.listed(shared, e), b);
+                if !excluded && !q.excludes(shared.surface, e.facet) {
                     aside.push((o, e.facet));
                 }
             }
@@ -669,28 +653,24 @@ impl Neighbourhoods {
         }
     }
 
-    /// The motion and margins of query `i` at point `p` (see [`Bounds`]).
+    /// The bounds of query `i` at point `p`.
     #[inline(always)]
     fn bounds(&self, i: usize, p: &Vec3, shared: &Shared<'_>) -> Bounds {
         let h = &self.heads[i];
-        let dp = p - h.point;
-        let reach = f64::from(h.reach);
-        let reach = if reach.is_finite() { reach } else { 0.0 };
-        Bounds {
-            dp,
-            m: dp.norm() + shared.delta,
-            tol: MARGIN * (p.amax() + h.point.amax() + reach),
-        }
+        Bounds::new(p, &h.point, f64::from(h.reach), shared.delta)
     }
 
-    /// `true` when the listed facet `e` is farther than `b` now by the first-order bound (with
-    /// `T` the motion of its first node).
+    /// What the bounds need of the listed facet `e`: its distance and direction then, and how it
+    /// moved (with `T` the motion of its first node).
     #[inline(always)]
-    fn excluded(&self, e: &Entry, bounds: &Bounds, shared: &Shared<'_>, b: f64) -> bool {
-        let moved = &self.moved_of(shared, e.facet);
-        let v = bounds.dp - moved.translation;
-        let slack = bounds.tol + DIRECTION_ERROR * l1(&v);
-        f64::from(e.distance) + e.direction.decode().dot(&v) - moved.spread - slack > b
+    fn listed(&self, shared: &Shared<'_>, e: &Entry) -> Listed {
+        let moved = self.moved_of(shared, e.facet);
+        Listed {
+            distance: f64::from(e.distance),
+            direction: e.direction.decode(),
+            translation: moved.translation,
+            spread: moved.spread,
+        }
     }
 
     /// Query `i` one facet at a time, given the measure of its first listed facet (`head`,
@@ -724,10 +704,10 @@ impl Neighbourhoods {
             .chain(&self.entries[a..z]);
         for e in rest {
             let b = best.map_or(f64::INFINITY, |b| b.distance);
-            if f64::from(e.distance) - bounds.m > b + bounds.tol {
+            if bounds.beyond(f64::from(e.distance), b) {
                 break;
             }
-            if best.is_some() && self.excluded(e, &bounds, shared, b) {
+            if best.is_some() && bounds.excludes(&self.listed(shared, e), b) {
                 continue;
             }
             offer(&mut best, surface, positions, q, e.facet);
@@ -737,10 +717,9 @@ impl Neighbourhoods {
             offer(&mut best, surface, positions, q, f);
         }
         measured += shared.valid.len();
-        // Facets not listed are farther than `limit` now; a degenerate winner is not certified.
-        let limit = f64::from(h.reach) - bounds.m - bounds.tol;
+        // The facets not listed must be excluded; a degenerate winner is not certified.
         let b = best.map_or(f64::INFINITY, |b| b.distance);
-        if !(b < limit || shared.max2.sqrt() < limit) {
+        if !bounds.unlisted(b, shared.max2.sqrt()) {
             return (Err(best.map(|b| b.facet)), measured);
         }
         let degenerate = best.is_some_and(|b| {

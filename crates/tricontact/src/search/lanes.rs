@@ -203,6 +203,12 @@ pub(crate) fn distances_squared(corners: &[[Vec3; 3]], p: &Vec3) -> V {
     V::new(out)
 }
 
+/// Three coordinates of eight lanes as vectors.
+#[inline(always)]
+pub(crate) fn load(v: &[[f64; PAIRS]; 3]) -> [f64x8; 3] {
+    [f64x8::new(v[0]), f64x8::new(v[1]), f64x8::new(v[2])]
+}
+
 /// Eight (point, facet) pairs, coordinate by coordinate: `corners[v][d][k]` is coordinate `d` of
 /// corner `v` of pair `k`'s facet, `points[d][k]` coordinate `d` of its point.
 #[derive(Debug, Clone, Copy, Default)]
@@ -260,9 +266,6 @@ pub(crate) fn closest_pairs(
     live: u32,
     mut emit: impl FnMut(usize, ClosestPoint, f64),
 ) -> Option<f64x8> {
-    let load = |v: &[[f64; PAIRS]; 3]| -> [f64x8; 3] {
-        [f64x8::new(v[0]), f64x8::new(v[1]), f64x8::new(v[2])]
-    };
     let (a, b, c) = (
         load(&pairs.corners[0]),
         load(&pairs.corners[1]),
@@ -310,7 +313,6 @@ pub(crate) fn closest_pairs(
 /// rounding, so that [`crate::Facet::new`] accepts them. The other lanes are to be decided by it.
 #[inline]
 pub(crate) fn clearly_valid(pairs: &Pairs, tolerance: f64) -> u32 {
-    let load = |v: &[[f64; PAIRS]; 3]| -> [f64x8; 3] { v.map(f64x8::new) };
     let [a, b, c] = pairs.corners.each_ref().map(load);
     let (ab, ac, bc) = (sub(&b, &a), sub(&c, &a), sub(&c, &b));
     let w = [

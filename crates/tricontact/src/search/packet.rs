@@ -272,31 +272,28 @@ impl Bvh {
         if as_leaf(self.root).is_some() {
             return false;
         }
-        // Level by level (the accepted internal children of one level are the next): the nodes
-        // of a level do not depend on one another, so their loads from memory overlap, where a
-        // depth-first walk waits for each node before it knows the next.
+        // Breadth first (a queue, level after level): the nodes waiting in it do not depend on
+        // one another, so their loads from memory overlap, where a depth-first walk waits for
+        // each node before it knows the next.
         g.nodes.push(self.root);
-        let mut level = 0;
-        while level < g.nodes.len() {
-            let end = g.nodes.len();
-            for at in level..end {
-                let node = &self.nodes[g.nodes[at] as usize];
-                let d = node.child_distances_squared_to_box(&b);
-                for (k, &c) in node.child.iter().enumerate() {
-                    if !(d[k] <= bound && d[k] < f64::INFINITY) {
-                        continue;
-                    }
-                    match as_leaf(c) {
-                        Some((first, count)) => {
-                            if !g.push(&node.child_box(k), first, count) {
-                                return false;
-                            }
+        let mut at = 0;
+        while let Some(&next) = g.nodes.get(at) {
+            at += 1;
+            let node = &self.nodes[next as usize];
+            let d = node.child_distances_squared_to_box(&b);
+            for (k, &c) in node.child.iter().enumerate() {
+                if !(d[k] <= bound && d[k] < f64::INFINITY) {
+                    continue;
+                }
+                match as_leaf(c) {
+                    Some((first, count)) => {
+                        if !g.push(&node.child_box(k), first, count) {
+                            return false;
                         }
-                        None => g.nodes.push(c),
                     }
+                    None => g.nodes.push(c),
                 }
             }
-            level = end;
         }
         true
     }

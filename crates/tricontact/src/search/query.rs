@@ -428,11 +428,11 @@ pub fn brute_force_closest(
     q: &Query,
     max_distance: f64,
 ) -> Option<Hit> {
-    let max2 = max_distance * max_distance;
-    let mut best = None;
     if !q.is_finite() {
         return None;
     }
+    let max2 = max_distance * max_distance;
+    let mut best = None;
     for f in 0..surface.len() {
         let facet = index(f);
         let c = surface.corners(facet, positions);

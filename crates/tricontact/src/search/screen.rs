@@ -3,15 +3,20 @@
 //! `d₀(f) + n̂(f)·(p − p₀ − T) − s − slack`, and whether the rest of its list and the unlisted
 //! facets are excluded (the formulas and their margins: [`crate::search::incremental`]).
 //!
-//! A query's values are put into lane `k` of a [`Stage`] (plain stores), and the tests run on
-//! `wide::f64x8`, without a branch per test; the results are bit masks over the lanes. Any NaN
+//! [`Bounds`] is the scalar form, one query at a time (the walks beyond a query's record, and the
+//! queries answered one facet at a time). For eight queries at once, their values are put into
+//! lane `k` of a [`Stage`] (plain stores), and the same tests, operation for operation, run on
+//! `wide::f64x8` without a branch per test; the results are bit masks over the lanes. Any NaN
 //! makes a test fail, so it excludes nothing.
 
 use wide::f64x8;
 
 use crate::linalg::Vec3;
 use crate::search::direction::DIRECTION_ERROR;
-use crate::search::lanes::PAIRS;
+use crate::search::lanes::{PAIRS, load};
+
+/// Relative margin of the certificate, on the magnitude of the coordinates and distances.
+pub(crate) const MARGIN: f64 = 1e-9;
 
 /// Listed facets after the first that are screened with both bounds.
 pub(crate) const NEAR: usize = 2;
@@ -50,12 +55,60 @@ pub(crate) struct Outcome {
     pub(crate) unlisted: u32,
 }
 
-/// What all queries share: the largest node motion `δ`, the search distance, the relative margin.
+/// What all queries share: the largest node motion `δ` and the search distance.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Limits {
     pub(crate) delta: f64,
     pub(crate) max_distance: f64,
-    pub(crate) margin: f64,
+}
+
+/// One query's bounds: its motion `dp = p − p₀`, `m = |dp| + δ` of the Lipschitz bound, the margin
+/// `tol` on distances, and its reach `ρ`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Bounds {
+    pub(crate) dp: Vec3,
+    m: f64,
+    tol: f64,
+    reach: f64,
+}
+
+impl Bounds {
+    /// The bounds of a query at `p` whose list was made at `p0` with reach `reach` (`+∞` for an
+    /// empty list), after the nodes moved by at most `delta`.
+    #[inline(always)]
+    pub(crate) fn new(p: &Vec3, p0: &Vec3, reach: f64, delta: f64) -> Self {
+        let dp = p - p0;
+        let finite = if reach.is_finite() { reach } else { 0.0 };
+        Self {
+            dp,
+            m: dp.norm() + delta,
+            tol: MARGIN * (p.amax() + p0.amax() + finite),
+            reach,
+        }
+    }
+
+    /// `true` when a listed facet at the distance `d0` then, and every one listed after it, is
+    /// farther than `b` now (the Lipschitz bound `d₀(f) − m`).
+    #[inline(always)]
+    pub(crate) fn beyond(&self, d0: f64, b: f64) -> bool {
+        d0 - self.m > b + self.tol
+    }
+
+    /// `true` when the listed facet `l` is farther than `b` now by the first-order bound.
+    #[inline(always)]
+    pub(crate) fn excludes(&self, l: &Listed, b: f64) -> bool {
+        let v = self.dp - l.translation;
+        let slack = self.tol + DIRECTION_ERROR * (v.x.abs() + v.y.abs() + v.z.abs());
+        l.distance + l.direction.dot(&v) - l.spread - slack > b
+    }
+
+    /// `true` when the facets not listed are farther than `b`, or than the search distance, now
+    /// (they were farther than `ρ`, so they are now farther than `ρ − m`).
+    #[inline(always)]
+    pub(crate) fn unlisted(&self, b: f64, max_distance: f64) -> bool {
+        let limit = self.reach - self.m - self.tol;
+        b < limit || max_distance < limit
+    }
 }
 
 impl Stage {
@@ -85,29 +138,27 @@ impl Stage {
     }
 
     /// Screens the lanes whose query points are `p` (coordinate by coordinate) and whose first
-    /// listed facets are at the distances `b` now.
+    /// listed facets are at the distances `b` now: [`Bounds`] lane by lane.
     #[inline]
     pub(crate) fn screen(&self, p: &[[f64; PAIRS]; 3], b: f64x8, limits: Limits) -> Outcome {
         let w = |a: &[f64; PAIRS]| f64x8::new(*a);
         let zero = f64x8::ZERO;
-        let p = [w(&p[0]), w(&p[1]), w(&p[2])];
-        let p0 = [w(&self.point[0]), w(&self.point[1]), w(&self.point[2])];
+        let (p, p0) = (load(p), load(&self.point));
         let dp = [p[0] - p0[0], p[1] - p0[1], p[2] - p0[2]];
         let m = (dp[0] * dp[0] + dp[1] * dp[1] + dp[2] * dp[2]).sqrt() + f64x8::splat(limits.delta);
         let amax = |v: &[f64x8; 3]| v[0].abs().fast_max(v[1].abs()).fast_max(v[2].abs());
         let reach = w(&self.reach);
         let finite = reach.is_finite().select(reach, zero);
-        let tol = f64x8::splat(limits.margin) * (amax(&p) + amax(&p0) + finite);
+        let tol = f64x8::splat(MARGIN) * (amax(&p) + amax(&p0) + finite);
         let beyond = |d0: f64x8| (d0 - m).simd_gt(b + tol);
         let mut need = [0u32; NEAR];
         for (j, need) in need.iter_mut().enumerate() {
             let d0 = w(&self.distance[j]);
-            let t = &self.translation[j];
-            let u = &self.direction[j];
-            let v = [dp[0] - w(&t[0]), dp[1] - w(&t[1]), dp[2] - w(&t[2])];
+            let (t, u) = (load(&self.translation[j]), load(&self.direction[j]));
+            let v = [dp[0] - t[0], dp[1] - t[1], dp[2] - t[2]];
             let l1 = v[0].abs() + v[1].abs() + v[2].abs();
             let slack = tol + f64x8::splat(DIRECTION_ERROR) * l1;
-            let along = w(&u[0]) * v[0] + w(&u[1]) * v[1] + w(&u[2]) * v[2];
+            let along = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
             let lower = d0 + along - w(&self.spread[j]) - slack;
             *need = (!(beyond(d0) | lower.simd_gt(b))).to_bitmask();
         }
@@ -119,5 +170,71 @@ impl Stage {
             later: beyond(w(&self.after)).to_bitmask(),
             unlisted: unlisted.to_bitmask(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::search::scenes::uniform;
+
+    /// The lanes of [`Stage::screen`] against [`Bounds`], query by query, on random values around
+    /// the decision thresholds (and NaN among them): the same masks, bit for bit.
+    #[test]
+    fn the_screen_is_the_scalar_bounds_lane_by_lane() {
+        let mut r = uniform(31);
+        let mut v = |s: f64| Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5) * s;
+        let (mut needed, mut excluded) = (0, 0);
+        for round in 0..2000 {
+            let limits = Limits {
+                delta: 0.01 * v(1.0).x.abs(),
+                max_distance: if round % 3 == 0 { 0.3 } else { f64::INFINITY },
+            };
+            let mut stage = Stage::default();
+            let mut p = [[0.0; PAIRS]; 3];
+            let mut b = [0.0; PAIRS];
+            let mut lanes = Vec::new();
+            for k in 0..PAIRS {
+                let p0 = v(4.0);
+                let q = p0 + v(0.1);
+                let first = 0.2 + v(0.2).x;
+                let listed: [Listed; NEAR] = std::array::from_fn(|_| Listed {
+                    distance: first + v(0.1).x.abs(),
+                    direction: v(2.0).normalize(),
+                    translation: v(0.05),
+                    spread: v(0.02).x.abs(),
+                });
+                let reach = if k == 7 { f64::INFINITY } else { first + 0.15 };
+                let after = if k == 6 {
+                    f64::NAN
+                } else {
+                    first + v(0.2).x.abs()
+                };
+                stage.set(k, &p0, (reach, after), &listed);
+                for d in 0..3 {
+                    p[d][k] = q[d];
+                }
+                b[k] = first;
+                lanes.push((Bounds::new(&q, &p0, reach, limits.delta), listed, after));
+            }
+            let out = stage.screen(&p, f64x8::new(b), limits);
+            for (k, (bounds, listed, after)) in lanes.iter().enumerate() {
+                let bit = |mask: u32| mask & (1 << k) != 0;
+                for (j, l) in listed.iter().enumerate() {
+                    let skip = bounds.beyond(l.distance, b[k]) || bounds.excludes(l, b[k]);
+                    assert_eq!(bit(out.need[j]), !skip, "round {round} lane {k} facet {j}");
+                    needed += usize::from(!skip);
+                    excluded += usize::from(skip);
+                }
+                assert_eq!(bit(out.later), bounds.beyond(*after, b[k]));
+                let unlisted = bounds.unlisted(b[k], limits.max_distance);
+                assert_eq!(bit(out.unlisted), unlisted, "round {round} lane {k}");
+            }
+        }
+        // Both outcomes occur often: the values straddle the thresholds.
+        assert!(
+            needed > 2000 && excluded > 2000,
+            "{needed} needed, {excluded} excluded"
+        );
     }
 }
