@@ -309,8 +309,9 @@ impl Neighbourhoods {
             .par_iter()
             .zip(positions.par_iter())
             .with_min_len(4096)
-            .map(|(a, b)| (b - a).norm())
+            .map(|(a, b)| (b - a).norm_squared())
             .reduce(|| 0.0, |a, b| if a > b || a.is_nan() { a } else { b })
+            .sqrt()
     }
 
     /// How `facet` moved since the lists were made (see [`Moved`]).
@@ -437,9 +438,11 @@ impl Neighbourhoods {
         let mut stage = Stage::default();
         // The queries with facets put aside, the (query in `open`, facet) pairs, and the queries
         // in `open` (with their first facet's distance) whose lists are to be walked further.
-        let mut open: Vec<Open> = Vec::new();
-        let mut aside: Vec<(u32, u32)> = Vec::new();
-        let mut walks: Vec<(u32, f64)> = Vec::new();
+        // Room for the usual case, so that a chunk allocates once per list (growing them from
+        // empty cost about 5 % of the search at 10⁶ queries).
+        let mut open: Vec<Open> = Vec::with_capacity(queries.len());
+        let mut aside: Vec<(u32, u32)> = Vec::with_capacity(NEAR * queries.len());
+        let mut walks: Vec<(u32, f64)> = Vec::with_capacity(queries.len());
         let limits = Limits {
             delta: shared.delta,
             max_distance: shared.max2.sqrt(),
