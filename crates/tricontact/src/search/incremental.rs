@@ -76,7 +76,7 @@ use crate::search::bvh::{Bvh, Update};
 use crate::search::direction::Direction;
 use crate::search::lanes::{self, PAIRS, Pairs};
 use crate::search::layout::index;
-use crate::search::node::{as_leaf, round_down};
+use crate::search::node::{Child, as_leaf, round_down};
 use crate::search::query::{HINT_CHUNK, TIE_MARGIN, check_answers, farthest_first};
 use crate::search::query::{Hit, Query};
 use crate::search::screen::{Bounds, Limits, Listed, NEAR, Stage};
@@ -140,6 +140,9 @@ struct Head {
     /// The rest of the list is `entries[start..]` up to the next head's `start`.
     start: u32,
 }
+
+/// One chunk's lists (see [`Neighbourhoods::chunk_lists`]).
+type ChunkLists = (Vec<Head>, Vec<Entry>, f64);
 
 /// The facet of an empty list.
 const NONE: u32 = u32::MAX;
@@ -219,34 +222,39 @@ impl Neighbourhoods {
         skin: f64,
     ) -> Result<Self, SurfaceError> {
         surface.check_positions(positions)?;
-        // Chunks in parallel, each query hinted with the previous one's closest facet: its record
-        // (without where its further entries start), those entries, and its facets' robustness.
-        let lists: Vec<(Head, Vec<Entry>, f64)> = queries
-            .par_chunks(HINT_CHUNK)
-            .flat_map_iter(|chunk| {
-                let mut hint = None;
-                chunk.iter().map(move |q| {
-                    let (reach, list) = bvh.neighbourhood(surface, q, hint, skin);
-                    hint = list.first().map(|&(_, f)| f).or(hint);
-                    let robust = list
-                        .iter()
-                        .map(|&(_, f)| robustness(&surface.corners(f, positions)))
-                        .fold(f64::INFINITY, f64::min);
-                    let (head, rest) = record(surface, positions, q, reach, &list);
-                    (head, rest, robust)
-                })
-            })
+        // Each facet's robustness once (a facet is in about a dozen lists).
+        let robustness_of: Vec<f64> = (0..surface.len())
+            .into_par_iter()
+            .with_min_len(4096)
+            .map(|f| robustness(&surface.corners(index(f), positions)))
             .collect();
-        let total: usize = lists.iter().map(|(_, rest, _)| rest.len()).sum();
+        // Chunks in parallel, each query hinted with the previous one's closest facet: the
+        // chunk's records (their further entries counted from the chunk's first), those entries,
+        // and the chunk's smallest robustness.
+        let chunks: Vec<Result<ChunkLists, usize>> = queries
+            .par_chunks(HINT_CHUNK)
+            .map(|chunk| Self::chunk_lists(bvh, surface, positions, &robustness_of, chunk, skin))
+            .collect();
+        let total: usize = chunks
+            .iter()
+            .map(|c| c.as_ref().map_or_else(|&n| n, |(_, rest, _)| rest.len()))
+            .sum();
         let too_long = || SurfaceError::ListsTooLong {
             entries: total + (1 + NEAR) * queries.len(),
         };
+        let chunks: Vec<ChunkLists> = chunks
+            .into_iter()
+            .collect::<Result<_, _>>()
+            .map_err(|_| too_long())?;
         let mut entries = Vec::with_capacity(total);
         let mut heads = Vec::with_capacity(queries.len() + 1);
         let mut robust = f64::INFINITY;
-        for (mut head, rest, r) in lists {
-            head.start = u32::try_from(entries.len()).map_err(|_| too_long())?;
-            heads.push(head);
+        for (chunk_heads, rest, r) in chunks {
+            let offset = entries.len();
+            for mut head in chunk_heads {
+                head.start = u32::try_from(offset + head.start as usize).map_err(|_| too_long())?;
+                heads.push(head);
+            }
             entries.extend_from_slice(&rest);
             robust = robust.min(r);
         }
@@ -270,6 +278,43 @@ impl Neighbourhoods {
             degenerate: bvh.degenerate_facets(),
             robust,
         })
+    }
+
+    /// The lists of one chunk of queries (see [`Neighbourhoods::new`]), made with one set of
+    /// buffers: the records, with `start` counted from the chunk's first further entry; the
+    /// further entries; the smallest robustness (`robustness[f]` for facet `f`) of the listed
+    /// facets. `Err` with the number of further entries when they cannot be counted in 32 bits.
+    fn chunk_lists(
+        bvh: &Bvh,
+        surface: &Surface,
+        positions: &[Vec3],
+        robustness: &[f64],
+        chunk: &[Query],
+        skin: f64,
+    ) -> Result<ChunkLists, usize> {
+        let mut heads = Vec::with_capacity(chunk.len());
+        let mut entries = Vec::new();
+        let mut robust = f64::INFINITY;
+        let (mut list, mut stack) = (Vec::new(), Vec::new());
+        let mut hint = None;
+        for q in chunk {
+            let reach = bvh.neighbourhood(surface, q, hint, skin, &mut list, &mut stack);
+            hint = list.first().map(|&(_, f)| f).or(hint);
+            for &(_, f) in &list {
+                robust = robust.min(robustness[f as usize]);
+            }
+            let start = u32::try_from(entries.len()).map_err(|_| entries.len())?;
+            heads.push(record(
+                surface,
+                positions,
+                q,
+                reach,
+                &list,
+                start,
+                &mut entries,
+            ));
+        }
+        Ok((heads, entries, robust))
     }
 
     /// The number of listed facets, all queries together (the lists take 64 bytes per query and
@@ -748,14 +793,16 @@ impl Neighbourhoods {
 }
 
 /// The record of query `q` whose list (facets by increasing squared distance, at `positions`) has
-/// the reach `reach`, with `start` zero, and its entries after the record's.
+/// the reach `reach`; its entries after the record's are appended to `rest`, from `start`.
 fn record(
     surface: &Surface,
     positions: &[Vec3],
     q: &Query,
     reach: f64,
     list: &[(f64, u32)],
-) -> (Head, Vec<Entry>) {
+    start: u32,
+    rest: &mut Vec<Entry>,
+) -> Head {
     let first = list.first().map_or(0, |&(_, f)| f);
     let empty = Entry {
         facet: first,
@@ -774,9 +821,10 @@ fn record(
         after: list
             .get(1 + NEAR)
             .map_or(f32::INFINITY, |&(d2, _)| round_down(d2.sqrt())),
-        start: 0,
+        start,
     };
-    (head, (1 + NEAR..list.len()).map(entry).collect())
+    rest.extend((1 + NEAR..list.len()).map(entry));
+    head
 }
 
 /// The list entry of `facet` for query `q` at `positions`, `d2` its squared distance from the tree.
@@ -798,22 +846,26 @@ fn entry(surface: &Surface, positions: &[Vec3], q: &Query, facet: u32, d2: f64) 
 }
 
 impl Bvh {
-    /// Every facet within `skin` of the closest distance `d` to `q`, as `(squared distance, facet)`
-    /// sorted by distance then index, and the reach `d + skin` (`+∞` without any facet). One
-    /// traversal: a box is pruned when it is farther than the best distance so far plus `skin`.
+    /// Every facet within `skin` of the closest distance `d` to `q`, into `found` as `(squared
+    /// distance, facet)` sorted by distance then index; returns the reach `d + skin` (`+∞`
+    /// without any facet). One traversal: a box is pruned when it is farther than the best
+    /// distance so far plus `skin`. `found` and `stack` are buffers (cleared first).
     fn neighbourhood(
         &self,
         surface: &Surface,
         q: &Query,
         hint: Option<u32>,
         skin: f64,
-    ) -> (f64, Vec<(f64, u32)>) {
+        found: &mut Vec<(f64, u32)>,
+        stack: &mut Vec<(Child, f64)>,
+    ) -> f64 {
         let mut best = hint
             .and_then(|f| self.candidate(surface, q, f))
             .map_or(f64::INFINITY, |c| c.d2);
         let bound = |best: f64| (best.sqrt() + skin).powi(2) * TIE_MARGIN;
-        let mut found = Vec::new();
-        let mut stack = vec![(self.root, 0.0)];
+        found.clear();
+        stack.clear();
+        stack.push((self.root, 0.0));
         while let Some((child, d2_box)) = stack.pop() {
             if d2_box > bound(best) {
                 continue;
@@ -842,12 +894,14 @@ impl Bvh {
             }
         }
         if best == f64::INFINITY {
-            return (f64::INFINITY, Vec::new());
+            found.clear();
+            return f64::INFINITY;
         }
         let reach = best.sqrt() + skin;
         found.retain(|&(d2, _)| d2 <= reach * reach);
-        found.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        (reach, found)
+        // A total order (a facet is found once), so an unstable sort gives the one result.
+        found.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        reach
     }
 }
 
