@@ -114,23 +114,73 @@ impl Node {
     }
 }
 
-/// The largest `f32` not above `x`.
+/// The largest `f32` not above `x` (NaN for NaN).
+///
+/// `y = x as f32` is the nearest; when it lies above `x` the answer is the `f32` below it, whose
+/// bits are one less for `y > 0` and one more for `y < 0` (`y` is never `+0` then: `x as f32`
+/// is `+0` only for `0 ≤ x`, and `−0` steps to the smallest negative subnormal, one more). The
+/// step is taken without a branch: coordinates of both signs made `f32::next_down`'s branch on
+/// the sign mispredict in the tree's build.
 #[allow(clippy::cast_possible_truncation)]
 pub(crate) fn round_down(x: f64) -> f32 {
     let y = x as f32;
-    if f64::from(y) > x { y.next_down() } else { y }
+    let toward = if y > 0.0 { u32::MAX } else { 1 };
+    let step = if f64::from(y) > x { toward } else { 0 };
+    f32::from_bits(y.to_bits().wrapping_add(step))
 }
 
-/// The smallest `f32` not below `x`.
+/// The smallest `f32` not below `x` (NaN for NaN): as [`round_down`], mirrored (`y` is never `−0`
+/// when it lies below `x`, and `+0` steps to the smallest positive subnormal).
 #[allow(clippy::cast_possible_truncation)]
 fn round_up(x: f64) -> f32 {
     let y = x as f32;
-    if f64::from(y) < x { y.next_up() } else { y }
+    let toward = if y < 0.0 { u32::MAX } else { 1 };
+    let step = if f64::from(y) < x { toward } else { 0 };
+    f32::from_bits(y.to_bits().wrapping_add(step))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The branch-free steps equal `next_down` / `next_up` wherever a step is taken, and the
+    /// results bracket `x`, on special values and on values of both signs at every scale.
+    #[test]
+    fn rounding_is_next_down_and_next_up() {
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            f64::from(f32::MIN_POSITIVE),
+            1e-46,
+            -1e-46,
+            1e-300,
+            -1e-300,
+            f64::from(f32::MAX) * 1.000_000_1,
+            -f64::from(f32::MAX) * 1.000_000_1,
+            f64::MAX,
+            f64::MIN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        let mut r = crate::search::scenes::uniform(3);
+        for _ in 0..20_000 {
+            let scale = 10f64.powf(90.0 * r() - 50.0);
+            xs.push((r() - 0.5) * scale);
+        }
+        for x in xs {
+            #[allow(clippy::cast_possible_truncation)]
+            let y = x as f32;
+            let down = if f64::from(y) > x { y.next_down() } else { y };
+            let up = if f64::from(y) < x { y.next_up() } else { y };
+            assert_eq!(round_down(x).to_bits(), down.to_bits(), "round_down({x:e})");
+            assert_eq!(round_up(x).to_bits(), up.to_bits(), "round_up({x:e})");
+            assert!(
+                f64::from(round_down(x)) <= x && f64::from(round_up(x)) >= x,
+                "{x:e}"
+            );
+        }
+        assert!(round_down(f64::NAN).is_nan() && round_up(f64::NAN).is_nan());
+    }
 
     #[test]
     fn boxes_round_outwards() {
