@@ -597,6 +597,23 @@ fn packets_survive_non_finite_queries() {
     }
     // A point that is not finite has no answer.
     assert_eq!((all[40], all[77]), (None, None));
+    // On a curved surface, with NaN or infinity amid a packet's queries (and the packet's box
+    // wrong if it took them in: a NaN coordinate restarts a running minimum).
+    let (nodes, facets) = torus(60, 30, 2.0, 0.6);
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    let mut queries = near_surface(&nodes, &surface, 5, 0.1);
+    for k in (100..queries.len()).step_by(97) {
+        queries[k].point[k % 3] = if k % 2 == 0 { f64::NAN } else { f64::INFINITY };
+    }
+    let all = bvh.closest_all(&surface, &queries, f64::INFINITY);
+    for (k, (q, hit)) in queries.iter().zip(&all).enumerate() {
+        same(
+            *hit,
+            brute_force_closest(&surface, &nodes, q, f64::INFINITY),
+        )
+        .unwrap_or_else(|e| panic!("query {k}: {e}"));
+    }
 }
 
 /// A large batch in random order is answered in Z-order and put back: the same answers as the

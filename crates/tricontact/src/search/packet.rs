@@ -260,12 +260,16 @@ impl Bvh {
     /// when there are more than [`MAX_LEAVES`].
     fn gather(&self, queries: &[Query], radius2: f64, g: &mut Gathered) -> bool {
         g.clear();
+        // The box of the finite queries only (the others have no answer): a NaN coordinate would
+        // not merely be left out of a running minimum but restart it, and the box would miss the
+        // queries before it.
         let b = queries
             .iter()
+            .filter(|q| q.is_finite())
             .fold(Aabb::EMPTY, |b, q| b.union_point(&q.point));
         // Queries spread over more than a few radii (random order) would gather too much. A box
-        // that is not finite (a query at NaN or infinity) gathers nothing reliably: the certificate
-        // needs every leaf left out to be far, not merely incomparable.
+        // that is not finite (no finite query) gathers nothing reliably: the certificate needs
+        // every leaf left out to be far, not merely incomparable.
         let spread2 = (b.max - b.min).norm_squared();
         if !spread2.is_finite() || spread2 > SPREAD * SPREAD * radius2 {
             return false;
