@@ -28,7 +28,9 @@ impl Aabb {
         points.iter().fold(Aabb::EMPTY, |b, p| b.union_point(p))
     }
 
-    /// The smallest box holding `self` and `p`.
+    /// The smallest box holding `self` and `p`. The points must be finite: a NaN coordinate does
+    /// not leave the box unchanged but resets that coordinate's bound, so callers leave such points
+    /// out.
     #[must_use]
     #[inline]
     pub fn union_point(&self, p: &Vec3) -> Aabb {
