@@ -142,7 +142,20 @@ struct Head {
 }
 
 /// One chunk's lists (see [`Neighbourhoods::chunk_lists`]).
-type ChunkLists = (Vec<Head>, Vec<Entry>, f64);
+struct ChunkLists {
+    /// The records, `start` counted from the chunk's first further entry.
+    heads: Vec<Head>,
+    /// The further entries.
+    entries: Vec<Entry>,
+    /// The smallest robustness of the listed facets.
+    robust: f64,
+    /// The listed facets, records' and further entries together.
+    listed: usize,
+}
+
+/// The robustness of every facet is computed once, in a table, when the queries are at least
+/// `1 / TABLE_COVER` of the facets (each facet is then in many lists); otherwise per listed facet.
+const TABLE_COVER: usize = 8;
 
 /// The facet of an empty list.
 const NONE: u32 = u32::MAX;
@@ -222,41 +235,45 @@ impl Neighbourhoods {
         skin: f64,
     ) -> Result<Self, SurfaceError> {
         surface.check_positions(positions)?;
-        // Each facet's robustness once (a facet is in about a dozen lists).
-        let robustness_of: Vec<f64> = (0..surface.len())
-            .into_par_iter()
-            .with_min_len(4096)
-            .map(|f| robustness(&surface.corners(index(f), positions)))
-            .collect();
-        // Chunks in parallel, each query hinted with the previous one's closest facet: the
-        // chunk's records (their further entries counted from the chunk's first), those entries,
-        // and the chunk's smallest robustness.
+        // Each facet's robustness once (a facet is in about a dozen lists) when the queries cover
+        // much of the surface; for a few queries on a large surface, per listed facet.
+        let table: Option<Vec<f64>> = (TABLE_COVER * queries.len() >= surface.len()).then(|| {
+            (0..surface.len())
+                .into_par_iter()
+                .with_min_len(4096)
+                .map(|f| robustness(&surface.corners(index(f), positions)))
+                .collect()
+        });
+        let robustness_of = |f: u32| match &table {
+            Some(t) => t[f as usize],
+            None => robustness(&surface.corners(f, positions)),
+        };
+        // Chunks in parallel, each query hinted with the previous one's closest facet.
         let chunks: Vec<Result<ChunkLists, usize>> = queries
             .par_chunks(HINT_CHUNK)
             .map(|chunk| Self::chunk_lists(bvh, surface, positions, &robustness_of, chunk, skin))
             .collect();
-        let total: usize = chunks
+        let listed: usize = chunks
             .iter()
-            .map(|c| c.as_ref().map_or_else(|&n| n, |(_, rest, _)| rest.len()))
+            .map(|c| c.as_ref().map_or_else(|&n| n, |c| c.listed))
             .sum();
-        let too_long = || SurfaceError::ListsTooLong {
-            entries: total + (1 + NEAR) * queries.len(),
-        };
+        let too_long = || SurfaceError::ListsTooLong { entries: listed };
         let chunks: Vec<ChunkLists> = chunks
             .into_iter()
             .collect::<Result<_, _>>()
             .map_err(|_| too_long())?;
+        let total = chunks.iter().map(|c| c.entries.len()).sum();
         let mut entries = Vec::with_capacity(total);
         let mut heads = Vec::with_capacity(queries.len() + 1);
         let mut robust = f64::INFINITY;
-        for (chunk_heads, rest, r) in chunks {
+        for chunk in chunks {
             let offset = entries.len();
-            for mut head in chunk_heads {
+            for mut head in chunk.heads {
                 head.start = u32::try_from(offset + head.start as usize).map_err(|_| too_long())?;
                 heads.push(head);
             }
-            entries.extend_from_slice(&rest);
-            robust = robust.min(r);
+            entries.extend_from_slice(&chunk.entries);
+            robust = robust.min(chunk.robust);
         }
         let empty = Entry {
             facet: 0,
@@ -281,40 +298,36 @@ impl Neighbourhoods {
     }
 
     /// The lists of one chunk of queries (see [`Neighbourhoods::new`]), made with one set of
-    /// buffers: the records, with `start` counted from the chunk's first further entry; the
-    /// further entries; the smallest robustness (`robustness[f]` for facet `f`) of the listed
-    /// facets. `Err` with the number of further entries when they cannot be counted in 32 bits.
+    /// buffers, `robustness(f)` giving facet `f`'s robustness. `Err` with the number of listed
+    /// facets so far when the chunk's further entries cannot be counted in 32 bits.
     fn chunk_lists(
         bvh: &Bvh,
         surface: &Surface,
         positions: &[Vec3],
-        robustness: &[f64],
+        robustness: &impl Fn(u32) -> f64,
         chunk: &[Query],
         skin: f64,
     ) -> Result<ChunkLists, usize> {
-        let mut heads = Vec::with_capacity(chunk.len());
-        let mut entries = Vec::new();
-        let mut robust = f64::INFINITY;
+        let mut out = ChunkLists {
+            heads: Vec::with_capacity(chunk.len()),
+            entries: Vec::new(),
+            robust: f64::INFINITY,
+            listed: 0,
+        };
         let (mut list, mut stack) = (Vec::new(), Vec::new());
         let mut hint = None;
         for q in chunk {
             let reach = bvh.neighbourhood(surface, q, hint, skin, &mut list, &mut stack);
             hint = list.first().map(|&(_, f)| f).or(hint);
             for &(_, f) in &list {
-                robust = robust.min(robustness[f as usize]);
+                out.robust = out.robust.min(robustness(f));
             }
-            let start = u32::try_from(entries.len()).map_err(|_| entries.len())?;
-            heads.push(record(
-                surface,
-                positions,
-                q,
-                reach,
-                &list,
-                start,
-                &mut entries,
-            ));
+            out.listed += list.len();
+            let start = u32::try_from(out.entries.len()).map_err(|_| out.listed)?;
+            let head = record(surface, positions, q, reach, &list, start, &mut out.entries);
+            out.heads.push(head);
         }
-        Ok((heads, entries, robust))
+        Ok(out)
     }
 
     /// The number of listed facets, all queries together (the lists take 64 bytes per query and
@@ -960,7 +973,53 @@ fn is_degenerate([a, b, c]: &[Vec3; 3]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::search::scenes::uniform;
+    use crate::search::scenes::{near_surface, torus, uniform};
+
+    /// The lists' robustness is the smallest of their facets', whether it comes from the table
+    /// (queries covering the surface) or is computed per listed facet (a few queries); on a
+    /// torus whose node positions are jittered, so that the facets differ.
+    #[test]
+    fn the_robustness_is_that_of_the_listed_facets_by_either_path() {
+        let (mut nodes, facets) = torus(40, 20, 2.0, 0.6);
+        let mut r = uniform(17);
+        for p in &mut nodes {
+            *p += Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5) * 0.05;
+        }
+        let surface = Surface::new(facets.clone(), nodes.len()).unwrap();
+        let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+        let all: Vec<Query> = near_surface(&nodes, &facets, 0.1, 2)
+            .into_iter()
+            .map(Query::point)
+            .collect();
+        let few: Vec<Query> = all.iter().step_by(4 * TABLE_COVER).copied().collect();
+        assert!(
+            TABLE_COVER * few.len() < surface.len() && TABLE_COVER * all.len() >= surface.len()
+        );
+        for queries in [&all, &few] {
+            let lists = Neighbourhoods::new(&bvh, &surface, &nodes, queries, 0.05).unwrap();
+            let (heads, entries) = (&lists.heads[..queries.len()], &lists.entries);
+            let listed = heads
+                .iter()
+                .filter(|h| h.facet != NONE)
+                .map(|h| h.facet)
+                .chain(
+                    heads
+                        .iter()
+                        .flat_map(|h| h.near.iter().filter(|e| e.listed()).map(|e| e.facet)),
+                )
+                .chain(entries.iter().map(|e| e.facet));
+            let expected = listed
+                .map(|f| robustness(&surface.corners(f, &nodes)))
+                .fold(f64::INFINITY, f64::min);
+            assert!(expected > 0.0 && expected < f64::INFINITY);
+            assert_eq!(
+                lists.robust.to_bits(),
+                expected.to_bits(),
+                "{} queries",
+                queries.len()
+            );
+        }
+    }
 
     /// Random facets (slivers among them), each node moved by just under the facet's robustness
     /// in the direction that shrinks the area most among random tries: still valid.
