@@ -41,6 +41,9 @@
 //! is the tree's, exactly.
 //!
 //! # Order of work
+//! Each node's motion `x − x₀` is computed once per call, in one pass that also gives `δ`; the
+//! bounds read it (one array instead of the positions and the reference positions, and no
+//! subtraction per facet: 8 % faster at 10⁵ queries, medians of eight interleaved runs).
 //! Queries go in chunks of 256 (in parallel); within a chunk, eight at a time, their first
 //! listed facets are measured together (`search::lanes`) and written as the answers, and
 //! each query is screened: every facet the bounds cannot exclude is put aside (all exclusions are
@@ -193,11 +196,13 @@ struct Best {
     closest: Option<ClosestPoint>,
 }
 
-/// What every query of one call shares: the largest node motion `δ`, the squared search distance,
-/// and the facets that were degenerate when the lists were made and are valid now.
+/// What every query of one call shares: each node's motion `x − x₀` and the largest `δ`, the
+/// squared search distance, and the facets that were degenerate when the lists were made and are
+/// valid now.
 struct Shared<'a> {
     surface: &'a Surface,
     positions: &'a [Vec3],
+    moves: &'a [Vec3],
     delta: f64,
     max2: f64,
     valid: &'a [u32],
@@ -363,23 +368,27 @@ impl Neighbourhoods {
     /// is NaN).
     #[must_use]
     pub fn motion(&self, positions: &[Vec3]) -> f64 {
+        largest(&self.moves(positions))
+    }
+
+    /// Each surface node's motion `x − x₀` since the lists were made.
+    fn moves(&self, positions: &[Vec3]) -> Vec<Vec3> {
         self.reference
             .par_iter()
             .zip(positions.par_iter())
             .with_min_len(4096)
-            .map(|(a, b)| (b - a).norm_squared())
-            .reduce(|| 0.0, |a, b| if a > b || a.is_nan() { a } else { b })
-            .sqrt()
+            .map(|(a, b)| b - a)
+            .collect()
     }
 
     /// How `facet` moved since the lists were made (see [`Moved`]).
     #[inline(always)]
     fn moved_of(&self, shared: &Shared<'_>, f: u32) -> Moved {
-        let (positions, reference) = (shared.positions, &self.reference);
+        let moves = shared.moves;
         let [a, b, c] = shared.surface.facets()[f as usize];
-        let t = positions[a as usize] - reference[a as usize];
-        let b = l1(&(positions[b as usize] - reference[b as usize] - t));
-        let c = l1(&(positions[c as usize] - reference[c as usize] - t));
+        let t = moves[a as usize];
+        let b = l1(&(moves[b as usize] - t));
+        let c = l1(&(moves[c as usize] - t));
         Moved {
             translation: t,
             spread: if (b + c).is_nan() { f64::NAN } else { b.max(c) },
@@ -437,10 +446,12 @@ impl Neighbourhoods {
             .copied()
             .filter(|&f| !is_degenerate(&surface.corners(f, positions)))
             .collect();
-        let delta = self.motion(positions);
+        let moves = self.moves(positions);
+        let delta = largest(&moves);
         let shared = Shared {
             surface,
             positions,
+            moves: &moves,
             delta,
             max2: max_distance * max_distance,
             valid: &valid,
@@ -938,6 +949,16 @@ fn offer(best: &mut Option<Best>, surface: &Surface, positions: &[Vec3], q: &Que
             closest: Some(closest),
         });
     }
+}
+
+/// The largest length of `moves` (NaN if one is NaN).
+fn largest(moves: &[Vec3]) -> f64 {
+    moves
+        .par_iter()
+        .with_min_len(4096)
+        .map(Vec3::norm_squared)
+        .reduce(|| 0.0, |a, b| if a > b || a.is_nan() { a } else { b })
+        .sqrt()
 }
 
 /// `|v|₁ = |v_x| + |v_y| + |v_z| ≥ |v|`.
