@@ -1,22 +1,23 @@
-//! The kernel's Voronoi-region computation lane by lane: four facets against one point (a leaf of
-//! the tree), or eight (point, facet) pairs at once (the incremental search).
+//! The kernel's Voronoi-region computation lane by lane: the up to eight facets of a tree leaf
+//! against one point, or eight (point, facet) pairs at once (the incremental search).
 //!
 //! The arithmetic is exactly that of [`distance_squared_to_triangle`], operation for operation:
 //! the six dot products `d1 … d6` of the edges `ab`, `ac` with `p − a`, `p − b`, `p − c`, the
 //! three scaled sub-areas `va, vb, vc`, the edge parameters and the face's barycentric coordinates,
 //! and finally `|p − (a N_a + b N_b + c N_c)|²`. The scalar kernel picks the first Voronoi region
 //! whose test holds (vertices, then edges, then the face); here every lane computes every
-//! candidate and selects by the same priority, without branches, one `wide` vector per quantity
-//! (`f64x4`: an AVX register; `f64x8`: AVX-512 where the target has it; measured 1.5–1.7× faster
-//! than the same code on `[f64; 4]` arrays, which the compiler left scalar). The results are bit
+//! candidate and selects by the same priority, without branches, one `wide::f64x8` per quantity
+//! (an AVX-512 register where the target has it, two AVX registers otherwise; with four lanes,
+//! `wide` was measured 1.5–1.7× faster than the same code on `[f64; 4]` arrays, which the compiler
+//! left scalar, and on this machine eight lanes cost what four do). The results are bit
 //! for bit those of the scalar kernel (no fused multiply–add on either side): the tree compares
 //! exactly the numbers the brute-force search compares. A lane whose selected coordinates are not
 //! finite (extreme coordinates, where the scalar kernel rescales) is recomputed with the scalar
-//! kernel. One generic body ([`region`]) serves both widths.
+//! kernel. One generic body ([`region`]) serves both uses.
 
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Not, Sub};
 
-use wide::{f64x4, f64x8};
+use wide::f64x8;
 
 use crate::closest::{
     ClosestPoint, Feature, closest_point_and_distance_squared, distance_squared_to_triangle,
@@ -24,10 +25,10 @@ use crate::closest::{
 use crate::linalg::Vec3;
 
 /// Facets of one leaf evaluated together.
-pub(crate) const LANES: usize = 4;
+pub(crate) const LANES: usize = 8;
 
-/// One coordinate of four facets.
-pub(crate) type V = f64x4;
+/// One coordinate of eight facets.
+pub(crate) type V = f64x8;
 
 /// (point, facet) pairs evaluated together by [`closest_pairs`].
 pub(crate) const PAIRS: usize = 8;
@@ -85,7 +86,7 @@ macro_rules! lane {
         }
     };
 }
-lane!(f64x4);
+
 lane!(f64x8);
 
 /// Lane-wise dot product, summed as nalgebra sums a 3-vector dot: `(x·x + y·y) + z·z`.
@@ -178,7 +179,7 @@ pub(crate) fn region<L: Lane>(a: &[L; 3], b: &[L; 3], c: &[L; 3], pl: &[L; 3]) -
     }
 }
 
-/// Squared distances from `p` to the facets `corners[..]` (one to four of them); lanes beyond
+/// Squared distances from `p` to the facets `corners[..]` (one to eight of them); lanes beyond
 /// `corners.len()` repeat the last facet.
 #[inline(always)]
 pub(crate) fn distances_squared(corners: &[[Vec3; 3]], p: &Vec3) -> V {

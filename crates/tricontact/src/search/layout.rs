@@ -5,10 +5,14 @@
 //! range changes (a binary search), so the two halves are the two halves of a Z-order cell and
 //! their boxes barely overlap; a range of identical codes is split in the middle. Splitting stops
 //! at leaves of at most [`LEAF_SIZE`] facets. (Splitting at the middle index instead was measured
-//! 3–10× slower to query: a middle index often straddles a jump of the Z curve.) Leaves hold 2.9
-//! facets on average on the benchmark's tori; splitting ranges of five to eight facets after
-//! their first four instead of at a Morton bit fills them to 3.1 and made coherent queries 1–2 %
-//! faster, within run-to-run noise: not kept. The top levels
+//! 3–10× slower to query: a middle index often straddles a jump of the Z curve.) A leaf's facets
+//! are measured together, one per lane of a `wide::f64x8` ([`crate::search::lanes`]), so a leaf
+//! holds up to eight: 5.2–5.4 on average on the benchmark's tori. Leaves of up to four (2.9 on
+//! average, one `f64x4`) were 15 % slower to query on the 10⁵-facet torus (medians of six
+//! interleaved runs; on this machine an eight-lane measurement costs what a four-lane one does),
+//! and leaves of up to five, six and seven lay in between. With four facets per leaf, splitting ranges of five to eight
+//! facets after their first four instead of at a Morton bit filled leaves to 3.1 and made coherent
+//! queries 1–2 % faster, within run-to-run noise: not kept. The top levels
 //! are split in parallel (`rayon::join`), each half into its own list, joined with shifted indices.
 //!
 //! # Collapse
@@ -19,8 +23,9 @@
 
 use crate::search::node::{Child, EMPTY, Node, WIDTH, as_leaf, leaf};
 
-/// Most facets per leaf (at most 7: the count is stored in three bits).
-pub const LEAF_SIZE: usize = 4;
+/// Most facets per leaf: the lanes of one measurement ([`crate::search::lanes`]; a leaf's count
+/// has four bits).
+pub const LEAF_SIZE: usize = 8;
 
 /// Below this many facets a range is split sequentially.
 const PARALLEL_GRAIN: usize = 1 << 16;
@@ -129,7 +134,7 @@ pub(crate) fn depth(nodes: &[Node], root: Child) -> usize {
     depth[root as usize]
 }
 
-/// Node and slot indices are `u32`; [`crate::search::Surface::new`] bounds the facet count to 2²⁸.
+/// Node and slot indices are `u32`; [`crate::search::Surface::new`] bounds the facet count to 2²⁷.
 #[inline]
 pub(crate) fn index(i: usize) -> u32 {
     debug_assert!(u32::try_from(i).is_ok());

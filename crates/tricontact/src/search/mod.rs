@@ -5,7 +5,7 @@
 //! * [`bvh`]: the bounding-volume hierarchy (parallel build, refit, rebuild on degraded quality);
 //! * [`layout`]: its topology (Morton splits collapsed to four-wide nodes); `node`: its nodes;
 //! * [`query`]: closest facet and facets within a distance, parallel over nodes, deterministic,
-//!   optionally from a hint facet; `lanes`: four facets measured at once;
+//!   optionally from a hint facet; `lanes`: a leaf's eight facets measured at once;
 //! * [`packet`]: coherent batches, a packet of consecutive queries sharing one traversal;
 //! * [`incremental`]: answers again after a small motion from per-query neighbourhood lists, with
 //!   a certificate from the motion, and tree fallback; `screen`: its bounds for eight queries at

@@ -1,7 +1,7 @@
 //! Tree nodes: four child boxes in `f32` (rounded outwards) stored axis by axis, and four child
 //! references.
 //!
-//! A reference with the top bit set is a leaf: `LEAF_FLAG | count << 28 | first` names `count ≤ 7`
+//! A reference with the top bit set is a leaf: `LEAF_FLAG | count << 27 | first` names `count ≤ 15`
 //! facets from `order[first..]`; otherwise it is the index of an internal node. An unused slot is
 //! the empty leaf with an empty box (`+∞ … −∞`), whose distance is `+∞`, so it is never visited.
 //!
@@ -27,18 +27,20 @@ pub(crate) type Child = u32;
 /// The reference of an unused child slot (an empty leaf).
 pub(crate) const EMPTY: Child = LEAF_FLAG;
 
-/// A leaf reference holding `count ≤ 7` facets from `order[first..]` (`first < 2²⁸`).
+/// A leaf reference holding `count ≤ 15` facets from `order[first..]` (`first < 2²⁷`).
 #[inline]
 pub(crate) fn leaf(first: u32, count: u32) -> Child {
-    debug_assert!(count < 8 && first < 1 << 28);
-    LEAF_FLAG | (count << 28) | first
+    debug_assert!(count < 16 && first < 1 << 27);
+    LEAF_FLAG | (count << 27) | first
 }
 
 /// `Some((first, count))` for a leaf reference.
 #[inline]
 pub(crate) fn as_leaf(child: Child) -> Option<(usize, usize)> {
-    (child & LEAF_FLAG != 0)
-        .then_some(((child & 0x0fff_ffff) as usize, ((child >> 28) & 7) as usize))
+    (child & LEAF_FLAG != 0).then_some((
+        (child & 0x07ff_ffff) as usize,
+        ((child >> 27) & 15) as usize,
+    ))
 }
 
 /// An internal node.
@@ -180,6 +182,21 @@ mod tests {
             );
         }
         assert!(round_down(f64::NAN).is_nan() && round_up(f64::NAN).is_nan());
+    }
+
+    #[test]
+    fn leaf_references_keep_their_first_slot_and_count() {
+        for first in [0u32, 1, 12_345, (1 << 27) - 1] {
+            for count in 0..16 {
+                let c = leaf(first, count);
+                assert_eq!(as_leaf(c), Some((first as usize, count as usize)));
+            }
+        }
+        assert_eq!(as_leaf(EMPTY), Some((0, 0)));
+        // Internal node indices are not leaves.
+        for node in [0u32, 1, (1 << 31) - 1] {
+            assert_eq!(as_leaf(node), None);
+        }
     }
 
     #[test]

@@ -9,8 +9,10 @@
 //! flat loop, four boxes per step, compacted without branches) and measures them nearest box
 //! first while the bound shrinks.
 //!
-//! On the 10⁵-facet torus of the benchmark a packet gathers about 69 leaves in 62 node visits,
-//! and a query lists 5.7 of them and measures 5. Tried and not kept (measured on that scene):
+//! On the 10⁵-facet torus of the benchmark a packet gathers about 42 leaves (of up to eight
+//! facets) in 42 node visits, and a query lists 4.3 of them, the previous answer's among them,
+//! and measures 4.1. Tried and not kept (measured on that scene with leaves of up to four facets,
+//! when a packet gathered 69 leaves in 62 node visits and a query listed 5.7 and measured 5):
 //! a cylinder ("puck") bound per leaf, centre, normal, radius and thickness, which would cut the
 //! measured leaves to 3.2 but made the query 6 % slower (its data and square root cost more than
 //! the leaves it saves); branch-free child selection in the gathering and prefetching the
@@ -30,7 +32,7 @@
 //!
 //! # Batches in no particular order
 //! A batch of at least 4096 queries (`REORDER_MIN`) whose consecutive queries are far apart (the
-//! median step over evenly spaced samples above eight mean leaf diagonals) is answered in the
+//! median step over evenly spaced samples above four mean leaf diagonals) is answered in the
 //! Z-order of its points and the answers put back in place: on the 10⁶-facet torus, shuffled queries went
 //! from 0.41 to 1.2 M/s per core. Forcing the Z-order on a batch already in surface order made it
 //! 1.4–1.7× slower (sorting, copies, and Z-order packets are less compact than rows along the
@@ -79,7 +81,7 @@ const ORDER_SAMPLES: usize = 255;
 
 /// A batch whose median step between consecutive queries exceeds this many leaf sizes is answered
 /// in Z-order.
-const ORDER_SPREAD: f64 = 8.0;
+const ORDER_SPREAD: f64 = 4.0;
 
 /// For each four-bit mask, the lanes it keeps first (in order), then the others: the permutation
 /// that compacts a block of four.

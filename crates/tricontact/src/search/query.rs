@@ -6,7 +6,7 @@
 //! top of the stack advancing only for children within the bound. A subtree is pruned when the
 //! squared distance to its box exceeds the best squared distance so far (with a relative margin of
 //! 1e-12, so that exact ties are never pruned). The facets of a leaf are measured together
-//! (`lanes`: the branch-free [`distance_squared_to_triangle`], bit for bit, four
+//! (`lanes`: the branch-free [`distance_squared_to_triangle`], bit for bit, up to eight
 //! facets at a time) on the corner copies the tree keeps in leaf order; only the winner is measured
 //! with the kernel's [`closest_point_on_triangle`], which says where its closest point lies (face,
 //! edge, vertex) and gives the reported distance.

@@ -81,9 +81,10 @@ impl Surface {
     /// # Errors
     /// [`SurfaceError`] for a node index out of range or repeated within a facet.
     pub fn new(facets: Vec<[u32; 3]>, node_count: usize) -> Result<Self, SurfaceError> {
-        // Adjacency rows hold about 12 entries per facet on a regular mesh; 3 × 2²⁸ keeps both the
-        // facet indices and the adjacency offsets in u32 with room to spare.
-        if facets.len() >= 1 << 28 {
+        // A tree leaf names its first slot in 27 bits (`search::node`); adjacency rows hold about
+        // 12 entries per facet on a regular mesh, so 12 × 2²⁷ keeps the adjacency offsets in u32
+        // too.
+        if facets.len() >= 1 << 27 {
             return Err(SurfaceError::TooLarge {
                 facets: facets.len(),
             });
