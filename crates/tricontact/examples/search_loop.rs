@@ -1,0 +1,116 @@
+//! # One search path in a loop, for A/B comparisons
+//!
+//! `search_bench` measures everything in about 90 s; comparing two builds of one path needs many
+//! short interleaved runs instead (this machine's speed drifts by tens of per cent over minutes).
+//! This program times one path on one core and prints the best time per query over `reps` calls:
+//!
+//! ```text
+//! cargo run --release -p tricontact --example search_loop -- closest 316 15
+//! cargo run --release -p tricontact --example search_loop -- incremental 1000 20
+//! ```
+//!
+//! The scene is `search_bench`'s: a torus of `nu × nu/2` quads split in two (316 gives 99 856
+//! facets, 1000 gives 10⁶), one query per facet within ±2 element sizes of the surface, in facet
+//! order. `closest` times [`Bvh::closest_all_into`]; `incremental` makes neighbourhood lists
+//! (skin half an element), deforms the torus by 0.01 element sizes as `search_bench` does and
+//! times [`Neighbourhoods::closest_all_into`]. Expected output (the time varies with the machine):
+//!
+//! ```text
+//! closest, 99856 facets: 385.2 ns per query (best of 15 calls, one core)
+//! ```
+
+use std::process::ExitCode;
+use std::time::Instant;
+
+use tricontact::Vec3;
+use tricontact::search::scenes::{self, torus};
+use tricontact::search::{Bvh, Neighbourhoods, Query, Surface};
+
+const USAGE: &str =
+    "usage: search_loop closest|incremental [nu ≥ 8, default 316] [reps ≥ 1, default 15]";
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mode = args.first().map_or("closest", String::as_str);
+    let nu = args.get(1).map_or(Ok(316), |s| s.parse::<u32>());
+    let reps = args.get(2).map_or(Ok(15), |s| s.parse::<usize>());
+    let (Ok(nu), Ok(reps)) = (nu, reps) else {
+        eprintln!("{USAGE}");
+        return ExitCode::FAILURE;
+    };
+    if nu < 8 || reps == 0 || !matches!(mode, "closest" | "incremental") {
+        eprintln!("{USAGE}");
+        return ExitCode::FAILURE;
+    }
+    let (nodes, facets) = torus(nu, nu / 2, 3.0, 1.0);
+    let h = std::f64::consts::TAU / f64::from(nu / 2);
+    let surface = Surface::new(facets.clone(), nodes.len()).expect("a valid torus");
+    let bvh = Bvh::build(&surface, &nodes, 0.0).expect("positions for every node");
+    let queries: Vec<Query> = scenes::near_surface(&nodes, &facets, 2.0 * h, 11)
+        .into_iter()
+        .map(Query::point)
+        .collect();
+    let mut out = vec![None; queries.len()];
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("a one-thread pool");
+    let best = pool.install(|| {
+        if mode == "closest" {
+            best_of(reps, || {
+                bvh.closest_all_into(&surface, &queries, f64::INFINITY, &mut out)
+                    .expect("one answer per query");
+            })
+        } else {
+            let lists = Neighbourhoods::new(&bvh, &surface, &nodes, &queries, 0.5 * h)
+                .expect("lists for the torus");
+            let moved = deformed(&nodes, h, 0.01);
+            let mut tree = bvh.clone();
+            best_of(reps, || {
+                lists
+                    .closest_all_into(
+                        &mut tree,
+                        &surface,
+                        &moved,
+                        &queries,
+                        f64::INFINITY,
+                        &mut out,
+                    )
+                    .expect("incremental search");
+            })
+        }
+    });
+    println!(
+        "{mode}, {} facets: {:.1} ns per query (best of {reps} calls, one core)",
+        facets.len(),
+        best * 1e9 / queries.len() as f64
+    );
+    ExitCode::SUCCESS
+}
+
+/// The shortest of `reps` wall-clock times of `f`, in seconds.
+fn best_of(reps: usize, mut f: impl FnMut()) -> f64 {
+    (0..reps)
+        .map(|_| {
+            let t = Instant::now();
+            f();
+            t.elapsed().as_secs_f64()
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// `search_bench`'s deformation: a wave and a twist of `a` element sizes each.
+fn deformed(nodes: &[Vec3], h: f64, a: f64) -> Vec<Vec3> {
+    nodes
+        .iter()
+        .map(|p| {
+            let wave = a * h * (2.0 * p.x).sin();
+            let twist = 0.25 * a * h * p.z;
+            Vec3::new(
+                p.x * twist.cos() - p.y * twist.sin(),
+                p.x * twist.sin() + p.y * twist.cos(),
+                p.z + wave,
+            )
+        })
+        .collect()
+}
