@@ -264,23 +264,6 @@ fn scene(nu: u32, nv: u32) {
     incremental(&surface, &nodes, &queries, bvh, h, &hits);
 }
 
-/// The torus moved by about `a` element sizes: a wave of amplitude `a h` along the axis and a twist
-/// about it whose largest displacement is `a h` (the torus reaches 4 from the axis, 1 along it).
-fn deformed(nodes: &[Vec3], h: f64, a: f64) -> Vec<Vec3> {
-    nodes
-        .iter()
-        .map(|p| {
-            let wave = a * h * (2.0 * p.x).sin();
-            let twist = 0.25 * a * h * p.z;
-            Vec3::new(
-                p.x * twist.cos() - p.y * twist.sin(),
-                p.x * twist.sin() + p.y * twist.cos(),
-                p.z + wave,
-            )
-        })
-        .collect()
-}
-
 /// Neighbourhood lists made at the initial positions (skin half an element), then, after
 /// deformations of 0.01, 0.1 and 0.2 element sizes: the incremental search against the full query
 /// alone and against the refit plus the full query (the tree must follow the nodes; the lists need
@@ -306,7 +289,7 @@ fn incremental(
         lists.bytes() as f64 * 1e-6
     );
     for a in [0.01, 0.1, 0.2] {
-        let moved = deformed(nodes, h, a);
+        let moved = scenes::deformed(nodes, h, a);
         let tree = Mutex::new(bvh.clone());
         let (t_refit, kind) = time_one_core(1, || {
             tree.lock()

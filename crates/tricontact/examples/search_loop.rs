@@ -22,7 +22,6 @@
 use std::process::ExitCode;
 use std::time::Instant;
 
-use tricontact::Vec3;
 use tricontact::search::scenes::{self, torus};
 use tricontact::search::{Bvh, Neighbourhoods, Query, Surface};
 
@@ -64,7 +63,7 @@ fn main() -> ExitCode {
         } else {
             let lists = Neighbourhoods::new(&bvh, &surface, &nodes, &queries, 0.5 * h)
                 .expect("lists for the torus");
-            let moved = deformed(&nodes, h, 0.01);
+            let moved = scenes::deformed(&nodes, h, 0.01);
             let mut tree = bvh.clone();
             best_of(reps, || {
                 lists
@@ -97,20 +96,4 @@ fn best_of(reps: usize, mut f: impl FnMut()) -> f64 {
             t.elapsed().as_secs_f64()
         })
         .fold(f64::INFINITY, f64::min)
-}
-
-/// `search_bench`'s deformation: a wave and a twist of `a` element sizes each.
-fn deformed(nodes: &[Vec3], h: f64, a: f64) -> Vec<Vec3> {
-    nodes
-        .iter()
-        .map(|p| {
-            let wave = a * h * (2.0 * p.x).sin();
-            let twist = 0.25 * a * h * p.z;
-            Vec3::new(
-                p.x * twist.cos() - p.y * twist.sin(),
-                p.x * twist.sin() + p.y * twist.cos(),
-                p.z + wave,
-            )
-        })
-        .collect()
 }

@@ -4,6 +4,8 @@
 //!   quad split into two facets: `2 nu nv` facets, outward normals, no boundary.
 //! * [`grid`]: a flat `n × n` square grid in the plane `z = 0`, normals `+z`: `2 n²` facets with
 //!   shared edges and vertices, the scene for exact ties.
+//! * [`near_surface`]: query points within a distance of a surface; [`deformed`]: a smooth
+//!   motion of its nodes (the benchmarks' small deformation).
 
 use crate::linalg::Vec3;
 
@@ -87,6 +89,25 @@ pub fn near_surface(nodes: &[Vec3], facets: &[[u32; 3]], spread: f64, seed: u64)
             };
             let n = (b - a).cross(&(c - a)).normalize();
             a + s * (b - a) + t * (c - a) + (2.0 * r() - 1.0) * spread * n
+        })
+        .collect()
+}
+
+/// `nodes` moved by a wave along `z`, `a h sin(2x)`, and a twist about `z` by the angle
+/// `a h z / 4`: a smooth deformation whose node motions are of order `a` element sizes `h` (the
+/// largest on the benchmarks' torus is 1.0–1.3 `a h`).
+#[must_use]
+pub fn deformed(nodes: &[Vec3], h: f64, a: f64) -> Vec<Vec3> {
+    nodes
+        .iter()
+        .map(|p| {
+            let wave = a * h * (2.0 * p.x).sin();
+            let twist = 0.25 * a * h * p.z;
+            Vec3::new(
+                p.x * twist.cos() - p.y * twist.sin(),
+                p.x * twist.sin() + p.y * twist.cos(),
+                p.z + wave,
+            )
         })
         .collect()
 }
