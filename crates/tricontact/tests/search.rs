@@ -5,7 +5,8 @@
 use proptest::prelude::*;
 use tricontact::search::scenes::{self, grid, torus};
 use tricontact::search::{
-    Bvh, Hit, Neighbourhoods, Query, Surface, SurfaceError, Update, brute_force_closest, measure,
+    Bvh, Hit, MAX_FACETS, Neighbourhoods, Query, Surface, SurfaceError, Update,
+    brute_force_closest, measure,
 };
 use tricontact::{Vec3, distance_squared_to_triangle};
 
@@ -311,6 +312,14 @@ fn bad_surfaces_are_errors() {
             given: 2
         })
     ));
+    // The facet limit is named in the message (a surface that large is not built here: it
+    // would take 1.6 GB).
+    let message = SurfaceError::TooLarge {
+        facets: MAX_FACETS + 1,
+    }
+    .to_string();
+    assert!(message.contains(&MAX_FACETS.to_string()), "{message}");
+    assert_eq!(MAX_FACETS, (1 << 27) - 1);
     // An empty surface answers nothing.
     let empty = Surface::new(vec![], 0).unwrap();
     let bvh = Bvh::build(&empty, &[], 0.0).unwrap();

@@ -6,7 +6,7 @@
 //! their boxes barely overlap; a range of identical codes is split in the middle. Splitting stops
 //! at leaves of at most [`LEAF_SIZE`] facets. (Splitting at the middle index instead was measured
 //! 3–10× slower to query: a middle index often straddles a jump of the Z curve.) A leaf's facets
-//! are measured together, one per lane of a `wide::f64x8` ([`crate::search::lanes`]), so a leaf
+//! are measured together, one per lane of a `wide::f64x8` (`search::lanes`), so a leaf
 //! holds up to eight: 5.2–5.4 on average on the benchmark's tori. Leaves of up to four (2.9 on
 //! average, one `f64x4`) were 15 % slower to query on the 10⁵-facet torus (medians of six
 //! interleaved runs; on this machine an eight-lane measurement costs what a four-lane one does),
@@ -23,7 +23,7 @@
 
 use crate::search::node::{Child, EMPTY, Node, WIDTH, as_leaf, leaf};
 
-/// Most facets per leaf: the lanes of one measurement ([`crate::search::lanes`]; a leaf's count
+/// Most facets per leaf: the lanes of one measurement (`search::lanes`; a leaf's count
 /// has four bits).
 pub const LEAF_SIZE: usize = 8;
 

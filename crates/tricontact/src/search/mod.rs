@@ -32,4 +32,4 @@ pub use aabb::Aabb;
 pub use bvh::{Bvh, LEAF_SIZE, REBUILD_RATIO, Update};
 pub use incremental::{IncrementalStats, Neighbourhoods};
 pub use query::{HINT_CHUNK, Hit, Query, brute_force_closest, measure, sort_hits};
-pub use surface::{Surface, SurfaceError};
+pub use surface::{MAX_FACETS, Surface, SurfaceError};

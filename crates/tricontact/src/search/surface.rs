@@ -8,6 +8,11 @@
 use thiserror::Error;
 
 /// Why a surface could not be built or searched.
+/// Most facets a surface may have: a tree leaf names its first slot in 27 bits
+/// (`search::node`), and adjacency rows, about 12 entries per facet on a regular mesh, keep their
+/// offsets in `u32` with room to spare.
+pub const MAX_FACETS: usize = (1 << 27) - 1;
+
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 pub enum SurfaceError {
     /// A facet names a node that does not exist.
@@ -28,8 +33,11 @@ pub enum SurfaceError {
         /// Positions given.
         given: usize,
     },
-    /// The surface has too many facets for 32-bit indices.
-    #[error("{facets} facets exceed the 32-bit index range of the search")]
+    /// The surface has more facets than the search indexes ([`MAX_FACETS`]).
+    #[error(
+        "{facets} facets exceed the search's limit of {} facets per surface",
+        MAX_FACETS
+    )]
     TooLarge {
         /// The number of facets given.
         facets: usize,
@@ -81,10 +89,7 @@ impl Surface {
     /// # Errors
     /// [`SurfaceError`] for a node index out of range or repeated within a facet.
     pub fn new(facets: Vec<[u32; 3]>, node_count: usize) -> Result<Self, SurfaceError> {
-        // A tree leaf names its first slot in 27 bits (`search::node`); adjacency rows hold about
-        // 12 entries per facet on a regular mesh, so 12 × 2²⁷ keeps the adjacency offsets in u32
-        // too.
-        if facets.len() >= 1 << 27 {
+        if facets.len() > MAX_FACETS {
             return Err(SurfaceError::TooLarge {
                 facets: facets.len(),
             });
