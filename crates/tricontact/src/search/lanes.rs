@@ -86,7 +86,6 @@ macro_rules! lane {
         }
     };
 }
-
 lane!(f64x8);
 
 /// Lane-wise dot product, summed as nalgebra sums a 3-vector dot: `(x·x + y·y) + z·z`.

@@ -7,12 +7,12 @@
 
 use thiserror::Error;
 
-/// Why a surface could not be built or searched.
 /// Most facets a surface may have: a tree leaf names its first slot in 27 bits
 /// (`search::node`), and adjacency rows, about 12 entries per facet on a regular mesh, keep their
 /// offsets in `u32` with room to spare.
 pub const MAX_FACETS: usize = (1 << 27) - 1;
 
+/// Why a surface could not be built or searched.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 pub enum SurfaceError {
     /// A facet names a node that does not exist.
