@@ -41,9 +41,9 @@
 //! is the tree's, exactly.
 //!
 //! # Order of work
-//! Each node's motion `x − x₀` is computed once per call, in one pass that also gives `δ`; the
-//! bounds read it (one array instead of the positions and the reference positions, and no
-//! subtraction per facet: 8 % faster at 10⁵ queries, medians of eight interleaved runs).
+//! Each node's motion `x − x₀` is computed once per call (`δ` is the longest); the bounds read
+//! it (one array instead of the positions and the reference positions, and no subtraction per
+//! facet: 8 % faster at 10⁵ queries, medians of eight interleaved runs).
 //! Queries go in chunks of 256 (in parallel); within a chunk, eight at a time, their first
 //! listed facets are measured together (`search::lanes`) and written as the answers, and
 //! each query is screened: every facet the bounds cannot exclude is put aside (all exclusions are
@@ -368,7 +368,13 @@ impl Neighbourhoods {
     /// is NaN).
     #[must_use]
     pub fn motion(&self, positions: &[Vec3]) -> f64 {
-        largest(&self.moves(positions))
+        longest(
+            self.reference
+                .par_iter()
+                .zip(positions.par_iter())
+                .with_min_len(4096)
+                .map(|(a, b)| b - a),
+        )
     }
 
     /// Each surface node's motion `x − x₀` since the lists were made.
@@ -447,7 +453,7 @@ impl Neighbourhoods {
             .filter(|&f| !is_degenerate(&surface.corners(f, positions)))
             .collect();
         let moves = self.moves(positions);
-        let delta = largest(&moves);
+        let delta = longest(moves.par_iter().with_min_len(4096).copied());
         let shared = Shared {
             surface,
             positions,
@@ -951,12 +957,10 @@ fn offer(best: &mut Option<Best>, surface: &Surface, positions: &[Vec3], q: &Que
     }
 }
 
-/// The largest length of `moves` (NaN if one is NaN).
-fn largest(moves: &[Vec3]) -> f64 {
+/// The largest length of `moves` (NaN if one is NaN), `0` for none.
+fn longest(moves: impl ParallelIterator<Item = Vec3>) -> f64 {
     moves
-        .par_iter()
-        .with_min_len(4096)
-        .map(Vec3::norm_squared)
+        .map(|m| m.norm_squared())
         .reduce(|| 0.0, |a, b| if a > b || a.is_nan() { a } else { b })
         .sqrt()
 }

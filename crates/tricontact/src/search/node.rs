@@ -186,7 +186,9 @@ mod tests {
 
     #[test]
     fn leaf_references_keep_their_first_slot_and_count() {
-        for first in [0u32, 1, 12_345, (1 << 27) - 1] {
+        // Every slot of the largest surface the search takes fits.
+        let last = u32::try_from(crate::search::MAX_FACETS).unwrap();
+        for first in [0u32, 1, 12_345, last] {
             for count in 0..16 {
                 let c = leaf(first, count);
                 assert_eq!(as_leaf(c), Some((first as usize, count as usize)));
