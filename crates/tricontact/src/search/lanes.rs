@@ -13,9 +13,7 @@
 //! for bit those of the scalar kernel (no fused multiply–add on either side): the tree compares
 //! exactly the numbers the brute-force search compares. A lane whose selected coordinates are not
 //! finite (extreme coordinates, where the scalar kernel rescales) is recomputed with the scalar
-//! kernel. One generic body ([`region`]) serves both uses.
-
-use std::ops::{Add, BitAnd, BitOr, Div, Mul, Not, Sub};
+//! kernel. One body ([`region`]) serves both uses.
 
 use wide::f64x8;
 
@@ -33,91 +31,36 @@ pub(crate) type V = f64x8;
 /// (point, facet) pairs evaluated together by [`closest_pairs`].
 pub(crate) const PAIRS: usize = 8;
 
-/// The operations the region computation needs from a vector of lanes.
-pub(crate) trait Lane:
-    Copy
-    + Add<Output = Self>
-    + Sub<Output = Self>
-    + Mul<Output = Self>
-    + Div<Output = Self>
-    + BitAnd<Output = Self>
-    + BitOr<Output = Self>
-    + Not<Output = Self>
-{
-    const ZERO: Self;
-    const ONE: Self;
-    /// Lane-wise `self ≤ other` as a mask.
-    fn le(self, other: Self) -> Self;
-    /// Lane-wise `self ≥ other` as a mask.
-    fn ge(self, other: Self) -> Self;
-    /// Where the mask `self` is set `t`, else `f`.
-    fn pick(self, t: Self, f: Self) -> Self;
-    /// The mask of finite lanes.
-    fn finite(self) -> Self;
-    /// One bit per lane of a mask.
-    fn bits(self) -> u32;
-}
-
-macro_rules! lane {
-    ($t:ty) => {
-        impl Lane for $t {
-            const ZERO: Self = <$t>::ZERO;
-            const ONE: Self = <$t>::ONE;
-            #[inline(always)]
-            fn le(self, other: Self) -> Self {
-                self.simd_le(other)
-            }
-            #[inline(always)]
-            fn ge(self, other: Self) -> Self {
-                self.simd_ge(other)
-            }
-            #[inline(always)]
-            fn pick(self, t: Self, f: Self) -> Self {
-                self.select(t, f)
-            }
-            #[inline(always)]
-            fn finite(self) -> Self {
-                self.is_finite()
-            }
-            #[inline(always)]
-            fn bits(self) -> u32 {
-                self.to_bitmask()
-            }
-        }
-    };
-}
-lane!(f64x8);
-
 /// Lane-wise dot product, summed as nalgebra sums a 3-vector dot: `(x·x + y·y) + z·z`.
 #[inline(always)]
-fn dot<L: Lane>(u: &[L; 3], v: &[L; 3]) -> L {
+fn dot(u: &[V; 3], v: &[V; 3]) -> V {
     u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
 }
 
 /// Lane-wise `u − v`.
 #[inline(always)]
-fn sub<L: Lane>(u: &[L; 3], v: &[L; 3]) -> [L; 3] {
+fn sub(u: &[V; 3], v: &[V; 3]) -> [V; 3] {
     [u[0] - v[0], u[1] - v[1], u[2] - v[2]]
 }
 
 /// Where `mask` is set, takes `value` into `n` (a bitwise select, no branch).
 #[inline(always)]
-fn select<L: Lane>(n: &mut [L; 3], mask: L, value: [L; 3]) {
+fn select(n: &mut [V; 3], mask: V, value: [V; 3]) {
     for (dst, src) in n.iter_mut().zip(value) {
-        *dst = mask.pick(src, *dst);
+        *dst = mask.select(src, *dst);
     }
 }
 
 /// What the region computation gives per lane.
-pub(crate) struct Region<L> {
+pub(crate) struct Region {
     /// Barycentric coordinates of the closest point.
-    pub(crate) n: [L; 3],
+    pub(crate) n: [V; 3],
     /// The closest point `a N_a + b N_b + c N_c`.
-    pub(crate) point: [L; 3],
+    pub(crate) point: [V; 3],
     /// `|p − point|²`.
-    pub(crate) d2: L,
+    pub(crate) d2: V,
     /// Feature masks, in the scalar kernel's priority: vertices 0, 1, 2, edges 0, 1, 2.
-    pub(crate) masks: [L; 6],
+    pub(crate) masks: [V; 6],
     /// Bits of the lanes whose coordinates are not finite (to be recomputed by the scalar kernel).
     pub(crate) bad: u32,
 }
@@ -125,7 +68,7 @@ pub(crate) struct Region<L> {
 /// The Voronoi region, closest point and squared distance of `p` and the facet `(a, b, c)`, lane
 /// by lane (see the module documentation).
 #[inline(always)]
-pub(crate) fn region<L: Lane>(a: &[L; 3], b: &[L; 3], c: &[L; 3], pl: &[L; 3]) -> Region<L> {
+pub(crate) fn region(a: &[V; 3], b: &[V; 3], c: &[V; 3], pl: &[V; 3]) -> Region {
     let (ab, ac, ap) = (sub(b, a), sub(c, a), sub(pl, a));
     let (bp, cp) = (sub(&ap, &ab), sub(&ap, &ac));
     let (d1, d2) = (dot(&ab, &ap), dot(&ac, &ap));
@@ -135,13 +78,13 @@ pub(crate) fn region<L: Lane>(a: &[L; 3], b: &[L; 3], c: &[L; 3], pl: &[L; 3]) -
     let va = d3 * d6 - d5 * d4;
     let vb = d5 * d2 - d1 * d6;
     // The region tests, in the scalar kernel's order of priority (vertices, edges, face).
-    let (zero, one) = (L::ZERO, L::ONE);
-    let v0 = d1.le(zero) & d2.le(zero);
-    let v1 = d3.ge(zero) & d4.le(d3);
-    let v2 = d6.ge(zero) & d5.le(d6);
-    let e0 = vc.le(zero) & d1.ge(zero) & d3.le(zero);
-    let e1 = va.le(zero) & d4.ge(d3) & d5.ge(d6);
-    let e2 = vb.le(zero) & d2.ge(zero) & d6.le(zero);
+    let (zero, one) = (V::ZERO, V::ONE);
+    let v0 = d1.simd_le(zero) & d2.simd_le(zero);
+    let v1 = d3.simd_ge(zero) & d4.simd_le(d3);
+    let v2 = d6.simd_ge(zero) & d5.simd_le(d6);
+    let e0 = vc.simd_le(zero) & d1.simd_ge(zero) & d3.simd_le(zero);
+    let e1 = va.simd_le(zero) & d4.simd_ge(d3) & d5.simd_ge(d6);
+    let e2 = vb.simd_le(zero) & d2.simd_ge(zero) & d6.simd_le(zero);
     let vertex = v0 | v1 | v2;
     // One division per lane, that of the region selected: the face's `1 / (va + vb + vc)` or an
     // edge's parameter, each the scalar kernel's own quotient (a vertex needs none). The face,
@@ -154,8 +97,8 @@ pub(crate) fn region<L: Lane>(a: &[L; 3], b: &[L; 3], c: &[L; 3], pl: &[L; 3]) -
         (e0, (d1, d1 - d3)),
         (vertex, (one, one)),
     ] {
-        num = mask.pick(n, num);
-        den = mask.pick(d, den);
+        num = mask.select(n, num);
+        den = mask.select(d, den);
     }
     let t = num / den;
     let mut n = [va * t, vb * t, vc * t];
@@ -166,9 +109,9 @@ pub(crate) fn region<L: Lane>(a: &[L; 3], b: &[L; 3], c: &[L; 3], pl: &[L; 3]) -
     select(&mut n, v1, [zero, one, zero]);
     select(&mut n, v0, [one, zero, zero]);
     // |p − (a N_a + b N_b + c N_c)|², summed as nalgebra sums it.
-    let point: [L; 3] = std::array::from_fn(|d| a[d] * n[0] + b[d] * n[1] + c[d] * n[2]);
+    let point: [V; 3] = std::array::from_fn(|d| a[d] * n[0] + b[d] * n[1] + c[d] * n[2]);
     let diff = sub(pl, &point);
-    let bad = (!(n[0].finite() & n[1].finite() & n[2].finite())).bits();
+    let bad = (!(n[0].is_finite() & n[1].is_finite() & n[2].is_finite())).to_bitmask();
     Region {
         n,
         point,
@@ -283,7 +226,7 @@ pub(crate) fn closest_pairs(
     for (m, mask) in r.masks.iter().enumerate().rev() {
         #[allow(clippy::cast_precision_loss)]
         let value = f64x8::splat(m as f64);
-        code = mask.pick(value, code);
+        code = mask.select(value, code);
     }
     let code = code.trunc_int().to_array();
     let mut left = live;
