@@ -23,6 +23,7 @@ use rayon::prelude::*;
 use crate::facet::Facet;
 use crate::linalg::Vec3;
 use crate::search::aabb::Aabb;
+use crate::search::lanes::LANES;
 pub use crate::search::layout::LEAF_SIZE;
 pub(crate) use crate::search::layout::index;
 use crate::search::layout::{depth, layout};
@@ -32,6 +33,9 @@ use crate::search::surface::{Surface, SurfaceError};
 
 /// A refit whose box area grows past this factor of the area at build triggers a rebuild.
 pub const REBUILD_RATIO: f64 = 1.5;
+
+/// Rows per facet in [`Bvh::rows`]: nine coordinates and the facet index.
+pub(crate) const ROWS: usize = 10;
 
 /// The slot of a facet that is not in the tree.
 pub(crate) const NO_SLOT: u32 = u32::MAX;
@@ -55,6 +59,12 @@ pub struct Bvh {
     pub(crate) order: Vec<u32>,
     /// Corner positions of `order[s]` at slot `s`.
     pub(crate) corners: Vec<[Vec3; 3]>,
+    /// The corners leaf by leaf, row-major: coordinate `r = 3v + d` of corner `v` of slot
+    /// `first + k` of the leaf `(first, count)` at `ROWS first + r count + k`, row 9 the facet
+    /// index (as `f64`, exact), then eight zeros.
+    pub(crate) rows: Vec<f64>,
+    /// The leaves `(first slot, count)` in slot order (they cover every slot once).
+    pub(crate) leaves: Vec<(u32, u32)>,
     /// Slot of each facet in `order`, [`NO_SLOT`] for a degenerate facet.
     pub(crate) slot: Vec<u32>,
     pub(crate) degenerate: Vec<bool>,
@@ -105,6 +115,7 @@ impl Bvh {
             .collect();
         keys.par_sort_unstable();
         let (root, nodes) = layout(&keys);
+        let leaves = leaves_in_order(&nodes, root);
         let stack_size = 3 * depth(&nodes, root) + 1;
         let order: Vec<u32> = keys.into_par_iter().map(|(_, f)| f).collect();
         let mut slot = vec![NO_SLOT; surface.len()];
@@ -121,6 +132,8 @@ impl Bvh {
             root,
             order,
             corners,
+            rows: Vec::new(),
+            leaves,
             slot,
             degenerate,
             stack_size,
@@ -129,7 +142,41 @@ impl Bvh {
             built_area: 0.0,
         };
         bvh.built_area = bvh.sweep();
+        bvh.fill_rows();
         bvh
+    }
+
+    /// Fills [`Bvh::rows`] from the corner copies, leaf by leaf in parallel.
+    fn fill_rows(&mut self) {
+        let Self {
+            rows,
+            leaves,
+            corners,
+            order,
+            ..
+        } = self;
+        rows.resize(ROWS * corners.len() + LANES, 0.0);
+        // Each leaf's block of rows, cut off in slot order.
+        let mut blocks = Vec::with_capacity(leaves.len());
+        let mut rest = rows.as_mut_slice();
+        for &(first, count) in leaves.iter() {
+            let (block, tail) = rest.split_at_mut(ROWS * count as usize);
+            blocks.push((block, first as usize));
+            rest = tail;
+        }
+        blocks
+            .into_par_iter()
+            .with_min_len(512)
+            .for_each(|(block, first)| {
+                let count = block.len() / ROWS;
+                for k in 0..count {
+                    let x = &corners[first + k];
+                    for r in 0..9 {
+                        block[r * count + k] = x[r / 3][r % 3];
+                    }
+                    block[9 * count + k] = f64::from(order[first + k]);
+                }
+            });
     }
 
     /// Copies the facets' corner positions into leaf order.
@@ -155,6 +202,7 @@ impl Bvh {
         let (centers, degenerate) = facet_centers(surface, positions);
         if degenerate == self.degenerate {
             self.copy_corners(surface, positions);
+            self.fill_rows();
             if self.sweep() <= REBUILD_RATIO * self.built_area {
                 return Ok(Update::Refit);
             }
@@ -324,6 +372,18 @@ fn sweep_subtree(
 
 fn nodes_len(runs: &[(usize, &mut [Node], usize)]) -> usize {
     runs.iter().map(|(_, r, _)| r.len()).sum()
+}
+
+/// The non-empty leaves of the tree `(nodes, root)` as `(first slot, count)`, in slot order.
+fn leaves_in_order(nodes: &[Node], root: Child) -> Vec<(u32, u32)> {
+    let mut leaves: Vec<(u32, u32)> = std::iter::once(root)
+        .chain(nodes.iter().flat_map(|n| n.child))
+        .filter_map(as_leaf)
+        .filter(|&(_, count)| count > 0)
+        .map(|(first, count)| (index(first), index(count)))
+        .collect();
+    leaves.par_sort_unstable();
+    leaves
 }
 
 /// Centroid and degeneracy of every facet at `positions`.

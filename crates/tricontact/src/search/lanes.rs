@@ -18,7 +18,8 @@
 use wide::f64x8;
 
 use crate::closest::{
-    ClosestPoint, Feature, closest_point_and_distance_squared, distance_squared_to_triangle,
+    ClosestPoint, Feature, closest_point_and_distance_squared, closest_point_on_triangle,
+    distance_squared_to_triangle,
 };
 use crate::linalg::Vec3;
 
@@ -146,6 +147,234 @@ pub(crate) fn distances_squared(corners: &[[Vec3; 3]], p: &Vec3) -> V {
     V::new(out)
 }
 
+/// What a leaf's measurement gives per lane: the squared distance, the barycentric coordinates of
+/// the closest point and its feature (a number into [`FEATURES`], or [`RECOMPUTE`] for a lane the
+/// scalar kernel measured: its distance is right, its coordinates are to be recomputed).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Measured {
+    pub(crate) d2: V,
+    pub(crate) n: [V; 3],
+    pub(crate) code: V,
+}
+
+/// The feature number of a lane measured by the scalar kernel (see [`Measured`]).
+pub(crate) const RECOMPUTE: u8 = 7;
+
+/// Measures `p` against the leaf of `count` facets whose rows start at `rows[0]` (see
+/// `Bvh::rows`; `corners` are the same facets' corners, read only for a lane the scalar kernel
+/// must redo). Lanes at and beyond `count` hold whatever follows and are to be ignored.
+#[inline(always)]
+pub(crate) fn measure_leaf(
+    rows: &[f64],
+    count: usize,
+    corners: &[[Vec3; 3]],
+    p: &Vec3,
+) -> Measured {
+    let corner = |v: usize| -> [V; 3] { std::array::from_fn(|d| row(rows, count, 3 * v + d)) };
+    let (a, b, c) = (corner(0), corner(1), corner(2));
+    let pl: [V; 3] = std::array::from_fn(|d| V::splat(p[d]));
+    let r = region(&a, &b, &c, &pl);
+    let mut measured = Measured {
+        d2: r.d2,
+        n: r.n,
+        code: feature_codes(&r.masks),
+    };
+    let bad = r.bad & ((1 << count) - 1);
+    if bad != 0 {
+        let mut d2 = r.d2.to_array();
+        let mut code = measured.code.to_array();
+        for (k, [a, b, c]) in corners.iter().enumerate() {
+            if bad & (1 << k) != 0 {
+                d2[k] = distance_squared_to_triangle(a, b, c, p);
+                code[k] = f64::from(RECOMPUTE);
+            }
+        }
+        measured.d2 = V::new(d2);
+        measured.code = V::new(code);
+    }
+    measured
+}
+
+/// The feature of each lane as a number into [`FEATURES`]: the first mask set in priority order
+/// (vertices 0, 1, 2, edges 3, 4, 5), 6 for the face.
+#[inline(always)]
+fn feature_codes(masks: &[V; 6]) -> V {
+    let mut code = V::splat(6.0);
+    for (m, mask) in masks.iter().enumerate().rev() {
+        #[allow(clippy::cast_precision_loss)]
+        let value = V::splat(m as f64);
+        code = mask.select(value, code);
+    }
+    code
+}
+
+/// Row `r` of a leaf of `count` facets whose rows start at `rows[0]`: eight lanes, the first
+/// `count` of them the leaf's.
+#[inline(always)]
+pub(crate) fn row(rows: &[f64], count: usize, r: usize) -> V {
+    let at = r * count;
+    V::new(rows[at..at + LANES].try_into().expect("eight lanes"))
+}
+
+/// Lane numbers `0, 1, …, 7`.
+#[inline(always)]
+fn lane() -> V {
+    V::new([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0])
+}
+
+/// The best facet in each lane over the leaves offered so far, in the order (squared distance,
+/// facet index), with where it came from and its closest point: facets, slots, gathered-leaf
+/// numbers and feature numbers as exact `f64`. The best over all lanes is the best over all
+/// offers, whatever lane each offer came in; updating it is branch-free.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LaneBest {
+    d2: V,
+    facet: V,
+    slot: V,
+    leaf: V,
+    n: [V; 3],
+    code: V,
+}
+
+/// The best of a [`LaneBest`].
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Winner {
+    pub(crate) d2: f64,
+    pub(crate) facet: u32,
+    pub(crate) slot: u32,
+    /// The gathered leaf it came from (`None` for the seed).
+    pub(crate) leaf: Option<u32>,
+    /// Barycentric coordinates of the closest point, valid when `feature` is one of [`FEATURES`].
+    pub(crate) n: [f64; 3],
+    /// A number into [`FEATURES`], or [`RECOMPUTE`].
+    pub(crate) feature: u8,
+}
+
+impl Winner {
+    /// The closest point on the winning facet, whose corners are `corners`: bit for bit
+    /// [`closest_point_on_triangle`]'s, from the lanes' coordinates where they hold.
+    #[inline]
+    pub(crate) fn closest(&self, [a, b, c]: &[Vec3; 3], p: &Vec3) -> ClosestPoint {
+        let Some(&feature) = FEATURES.get(usize::from(self.feature)) else {
+            return closest_point_on_triangle(a, b, c, p);
+        };
+        // Summed as the lanes sum it (and as the scalar kernel does).
+        let [na, nb, nc] = self.n;
+        ClosestPoint {
+            feature,
+            barycentric: self.n,
+            point: a * na + b * nb + c * nc,
+            distance: self.d2.sqrt(),
+        }
+    }
+}
+
+impl LaneBest {
+    /// Nothing offered yet: every lane at `max2` with no facet (`+∞`), so that a facet at `max2`
+    /// is still taken.
+    #[inline(always)]
+    pub(crate) fn new(max2: f64) -> Self {
+        Self {
+            d2: V::splat(max2),
+            facet: V::splat(f64::INFINITY),
+            slot: V::splat(-1.0),
+            leaf: V::splat(-1.0),
+            n: [V::ZERO; 3],
+            code: V::splat(f64::from(RECOMPUTE)),
+        }
+    }
+
+    /// Offers one candidate, not from a gathered leaf, in lane 0 (its closest point is to be
+    /// recomputed).
+    #[inline]
+    pub(crate) fn seed(&mut self, d2: f64, facet: u32, slot: u32) {
+        let one = |v: f64| V::new([v, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        let measured = Measured {
+            d2: one(d2),
+            n: [V::ZERO; 3],
+            code: V::splat(f64::from(RECOMPUTE)),
+        };
+        let lane0 = lane().simd_eq(V::ZERO);
+        self.take(
+            &measured,
+            one(f64::from(facet)),
+            one(f64::from(slot)),
+            -1.0,
+            lane0,
+        );
+    }
+
+    /// Offers the lanes `live` of a measurement, with their facet indices and slots, from the
+    /// gathered leaf `leaf`. A lane whose distance is NaN is never taken.
+    #[inline(always)]
+    fn take(&mut self, m: &Measured, facet: V, slot: V, leaf: f64, live: V) {
+        let better = m.d2.simd_lt(self.d2) | (m.d2.simd_eq(self.d2) & facet.simd_lt(self.facet));
+        let take = better & live;
+        self.d2 = take.select(m.d2, self.d2);
+        self.facet = take.select(facet, self.facet);
+        self.slot = take.select(slot, self.slot);
+        self.leaf = take.select(V::splat(leaf), self.leaf);
+        for (n, new) in self.n.iter_mut().zip(m.n) {
+            *n = take.select(new, *n);
+        }
+        self.code = take.select(m.code, self.code);
+    }
+
+    /// Offers the measurement `m` of the `count` facets of the leaf whose rows start at
+    /// `rows[0]` and slots at `first` (lanes past `count` ignored), as the gathered leaf `leaf`.
+    #[inline(always)]
+    pub(crate) fn take_leaf(
+        &mut self,
+        rows: &[f64],
+        (first, count): (usize, usize),
+        m: &Measured,
+        leaf: u32,
+    ) {
+        #[allow(clippy::cast_precision_loss)]
+        let (at, live) = (first as f64, count as f64);
+        self.take(
+            m,
+            row(rows, count, 9),
+            V::splat(at) + lane(),
+            f64::from(leaf),
+            lane().simd_lt(V::splat(live)),
+        );
+    }
+
+    /// The smallest squared distance of all lanes (`max2` while nothing was taken).
+    #[inline(always)]
+    pub(crate) fn bound(&self) -> f64 {
+        let d = self.d2.to_array();
+        let m = |a: f64, b: f64| a.min(b);
+        m(
+            m(m(d[0], d[1]), m(d[2], d[3])),
+            m(m(d[4], d[5]), m(d[6], d[7])),
+        )
+    }
+
+    /// The best over all lanes, `None` when nothing was taken.
+    #[inline]
+    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+    pub(crate) fn best(&self) -> Option<Winner> {
+        let d2 = self.bound();
+        let tied = self.d2.simd_eq(V::splat(d2));
+        let facet = tied.select(self.facet, V::splat(f64::INFINITY)).to_array();
+        let k = (0..LANES).fold(0, |m, k| if facet[k] < facet[m] { k } else { m });
+        if facet[k] == f64::INFINITY {
+            return None;
+        }
+        let leaf = self.leaf.as_array()[k];
+        Some(Winner {
+            d2,
+            facet: facet[k] as u32,
+            slot: self.slot.as_array()[k] as u32,
+            leaf: (leaf >= 0.0).then_some(leaf as u32),
+            n: self.n.map(|n| n.as_array()[k]),
+            feature: self.code.as_array()[k] as u8,
+        })
+    }
+}
+
 /// Three coordinates of eight lanes as vectors.
 #[inline(always)]
 pub(crate) fn load(v: &[[f64; PAIRS]; 3]) -> [f64x8; 3] {
@@ -220,15 +449,7 @@ pub(crate) fn closest_pairs(
     let point = r.point.map(f64x8::to_array);
     let d2 = r.d2.to_array();
     let distance = distance_lanes.to_array();
-    // The feature of each lane, as a number: the first mask set in priority order (vertices 0, 1,
-    // 2, edges 3, 4, 5), 6 for the face.
-    let mut code = f64x8::splat(6.0);
-    for (m, mask) in r.masks.iter().enumerate().rev() {
-        #[allow(clippy::cast_precision_loss)]
-        let value = f64x8::splat(m as f64);
-        code = mask.select(value, code);
-    }
-    let code = code.trunc_int().to_array();
+    let code = feature_codes(&r.masks).trunc_int().to_array();
     let mut left = live;
     while left != 0 {
         let k = left.trailing_zeros() as usize;

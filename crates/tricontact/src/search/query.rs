@@ -38,7 +38,7 @@ use rayon::prelude::*;
 use crate::closest::{ClosestPoint, closest_point_on_triangle, distance_squared_to_triangle};
 use crate::facet::Facet;
 use crate::linalg::Vec3;
-use crate::search::bvh::{Bvh, NO_SLOT, index};
+use crate::search::bvh::{Bvh, NO_SLOT, ROWS, index};
 use crate::search::lanes;
 use crate::search::node::{Child, EMPTY, as_leaf};
 use crate::search::surface::{Surface, SurfaceError};
@@ -263,7 +263,7 @@ impl Bvh {
         best: &mut Option<Candidate>,
     ) {
         let corners = &self.corners[first..first + count];
-        let d2 = lanes::distances_squared(corners, &q.point);
+        let d2 = lanes::measure_leaf(&self.rows[ROWS * first..], count, corners, &q.point).d2;
         // Only a facet at most as far as the best so far can win (a tie is decided by the index):
         // the others are passed over without a branch each or a look-up of their index.
         let limit = best.map_or(max2, |b| b.d2);
@@ -277,6 +277,33 @@ impl Bvh {
                 Candidate::offer(best, d2[k], facet, index(first + k), max2);
             }
         }
+    }
+
+    /// Offers the facets of the leaf `first..first + count` (evaluated together, see [`lanes`])
+    /// to the lane-wise `best`, as the gathered leaf number `leaf`.
+    #[inline(always)]
+    pub(crate) fn take_leaf(
+        &self,
+        surface: &Surface,
+        q: &Query,
+        (first, count): (usize, usize),
+        leaf: u32,
+        best: &mut lanes::LaneBest,
+    ) {
+        let rows = &self.rows[ROWS * first..];
+        let corners = &self.corners[first..first + count];
+        let mut m = lanes::measure_leaf(rows, count, corners, &q.point);
+        if q.exclude.is_some() {
+            // An excluded facet's lane is NaN, which is never taken.
+            let mut d = m.d2.to_array();
+            for (k, d) in d.iter_mut().enumerate().take(count) {
+                if q.excludes(surface, self.order[first + k]) {
+                    *d = f64::NAN;
+                }
+            }
+            m.d2 = lanes::V::new(d);
+        }
+        best.take_leaf(rows, (first, count), &m, leaf);
     }
 
     /// Every facet within `radius` of `q`, sorted by distance then facet index.
