@@ -23,7 +23,7 @@ use rayon::prelude::*;
 use crate::facet::Facet;
 use crate::linalg::Vec3;
 use crate::search::aabb::Aabb;
-use crate::search::lanes::LANES;
+use crate::search::lanes::{LANES, leaf_corners};
 pub use crate::search::layout::LEAF_SIZE;
 pub(crate) use crate::search::layout::index;
 use crate::search::layout::{depth, layout};
@@ -58,13 +58,14 @@ pub struct Bvh {
     /// Facet indices in leaf order.
     pub(crate) order: Vec<u32>,
     /// Corner positions of `order[s]` at slot `s`.
-    pub(crate) corners: Vec<[Vec3; 3]>,
     /// The corners leaf by leaf, row-major: coordinate `r = 3v + d` of corner `v` of slot
     /// `first + k` of the leaf `(first, count)` at `ROWS first + r count + k`, row 9 the facet
     /// index (as `f64`, exact), then eight zeros.
     pub(crate) rows: Vec<f64>,
     /// The leaves `(first slot, count)` in slot order (they cover every slot once).
     pub(crate) leaves: Vec<(u32, u32)>,
+    /// Each slot's lane in its leaf and the leaf's count.
+    pub(crate) place: Vec<[u8; 2]>,
     /// Slot of each facet in `order`, [`NO_SLOT`] for a degenerate facet.
     pub(crate) slot: Vec<u32>,
     pub(crate) degenerate: Vec<bool>,
@@ -122,18 +123,14 @@ impl Bvh {
         for (s, &f) in order.iter().enumerate() {
             slot[f as usize] = index(s);
         }
-        let corners = order
-            .par_iter()
-            .with_min_len(4096)
-            .map(|&f| surface.corners(f, positions))
-            .collect();
+        let place = leaf_places(&leaves, order.len());
         let mut bvh = Self {
             nodes,
             root,
             order,
-            corners,
             rows: Vec::new(),
             leaves,
+            place,
             slot,
             degenerate,
             stack_size,
@@ -141,21 +138,21 @@ impl Bvh {
             inflation,
             built_area: 0.0,
         };
+        bvh.fill_rows(surface, positions);
         bvh.built_area = bvh.sweep();
-        bvh.fill_rows();
         bvh
     }
 
-    /// Fills [`Bvh::rows`] from the corner copies, leaf by leaf in parallel.
-    fn fill_rows(&mut self) {
+    /// Fills [`Bvh::rows`] with the corners of the facets at `positions`, leaf by leaf in
+    /// parallel.
+    fn fill_rows(&mut self, surface: &Surface, positions: &[Vec3]) {
         let Self {
             rows,
             leaves,
-            corners,
             order,
             ..
         } = self;
-        rows.resize(ROWS * corners.len() + LANES, 0.0);
+        rows.resize(ROWS * order.len() + LANES, 0.0);
         // Each leaf's block of rows, cut off in slot order.
         let mut blocks = Vec::with_capacity(leaves.len());
         let mut rest = rows.as_mut_slice();
@@ -170,22 +167,28 @@ impl Bvh {
             .for_each(|(block, first)| {
                 let count = block.len() / ROWS;
                 for k in 0..count {
-                    let x = &corners[first + k];
+                    let facet = order[first + k];
+                    let x = surface.corners(facet, positions);
                     for r in 0..9 {
                         block[r * count + k] = x[r / 3][r % 3];
                     }
-                    block[9 * count + k] = f64::from(order[first + k]);
+                    block[9 * count + k] = f64::from(facet);
                 }
             });
     }
 
-    /// Copies the facets' corner positions into leaf order.
-    fn copy_corners(&mut self, surface: &Surface, positions: &[Vec3]) {
-        self.corners
-            .par_iter_mut()
-            .zip(self.order.par_iter())
-            .with_min_len(4096)
-            .for_each(|(c, &f)| *c = surface.corners(f, positions));
+    /// The rows of the leaf whose first slot is `first`.
+    #[inline]
+    pub(crate) fn leaf_rows(&self, first: usize) -> &[f64] {
+        &self.rows[ROWS * first..]
+    }
+
+    /// The corners of the facet at `slot`, from its leaf's rows.
+    #[inline]
+    pub(crate) fn slot_corners(&self, slot: u32) -> [Vec3; 3] {
+        let s = slot as usize;
+        let [lane, count] = self.place[s].map(usize::from);
+        leaf_corners(self.leaf_rows(s - lane), count, lane)
     }
 
     /// Moves the tree to new `positions`: a refit, or a rebuild when the refit quality degrades or
@@ -201,8 +204,7 @@ impl Bvh {
         surface.check_positions(positions)?;
         let (centers, degenerate) = facet_centers(surface, positions);
         if degenerate == self.degenerate {
-            self.copy_corners(surface, positions);
-            self.fill_rows();
+            self.fill_rows(surface, positions);
             if self.sweep() <= REBUILD_RATIO * self.built_area {
                 return Ok(Update::Refit);
             }
@@ -234,11 +236,11 @@ impl Bvh {
         let Self {
             nodes,
             root,
-            corners,
+            rows,
             inflation,
             ..
         } = self;
-        let measure = sweep_subtree(nodes, 0, *root, corners, *inflation).1;
+        let measure = sweep_subtree(nodes, 0, *root, rows, *inflation).1;
         self.leaf_size = measure.mean_diagonal();
         measure.area
     }
@@ -292,12 +294,21 @@ impl Measure {
     }
 }
 
-/// The box of the leaf `corners[first..first + count]`.
-fn leaf_box(corners: &[[Vec3; 3]], first: usize, count: usize, inflation: f64) -> Aabb {
-    corners[first..first + count]
-        .iter()
-        .fold(Aabb::EMPTY, |acc, c| acc.union(&Aabb::of_points(c)))
-        .inflate(inflation)
+/// The box of the leaf `(first, count)` of the tree's `rows`, inflated by `inflation`: each
+/// coordinate's bounds over the leaf's three rows of it (the corners of a facet in the tree are
+/// finite).
+fn leaf_box(rows: &[f64], first: usize, count: usize, inflation: f64) -> Aabb {
+    let block = &rows[ROWS * first..ROWS * (first + count)];
+    let mut b = Aabb::EMPTY;
+    for v in 0..3 {
+        for d in 0..3 {
+            for &x in &block[(3 * v + d) * count..(3 * v + d + 1) * count] {
+                b.min[d] = b.min[d].min(x);
+                b.max[d] = b.max[d].max(x);
+            }
+        }
+    }
+    b.inflate(inflation)
 }
 
 /// Sweeps the subtree rooted at `child`, whose internal nodes are `nodes` (global indices from
@@ -306,17 +317,14 @@ fn sweep_subtree(
     nodes: &mut [Node],
     base: usize,
     child: Child,
-    corners: &[[Vec3; 3]],
+    rows: &[f64],
     inflation: f64,
 ) -> (Aabb, Measure) {
     if let Some((first, count)) = as_leaf(child) {
         if count == 0 {
             return (Aabb::EMPTY, Measure::default());
         }
-        return (
-            leaf_box(corners, first, count, inflation),
-            Measure::default(),
-        );
+        return (leaf_box(rows, first, count, inflation), Measure::default());
     }
     debug_assert_eq!(child as usize, base);
     let (head, mut rest) = nodes.split_at_mut(1);
@@ -338,14 +346,14 @@ fn sweep_subtree(
     let swept: Vec<(usize, Aabb, Measure)> = if parallel {
         runs.into_par_iter()
             .map(|(k, run, b)| {
-                let (bx, m) = sweep_subtree(run, b, refs[k], corners, inflation);
+                let (bx, m) = sweep_subtree(run, b, refs[k], rows, inflation);
                 (k, bx, m)
             })
             .collect()
     } else {
         runs.into_iter()
             .map(|(k, run, b)| {
-                let (bx, m) = sweep_subtree(run, b, refs[k], corners, inflation);
+                let (bx, m) = sweep_subtree(run, b, refs[k], rows, inflation);
                 (k, bx, m)
             })
             .collect()
@@ -361,7 +369,7 @@ fn sweep_subtree(
         if let Some((first, count)) = as_leaf(c)
             && count > 0
         {
-            let bx = leaf_box(corners, first, count, inflation);
+            let bx = leaf_box(rows, first, count, inflation);
             head[0].set_child_box(k, &bx);
             total = total.union(&bx);
             measure = measure.with_box(&bx, true);
@@ -372,6 +380,16 @@ fn sweep_subtree(
 
 fn nodes_len(runs: &[(usize, &mut [Node], usize)]) -> usize {
     runs.iter().map(|(_, r, _)| r.len()).sum()
+}
+
+/// Each slot's `[lane in its leaf, the leaf's count]`, for `slots` slots covered by `leaves`.
+fn leaf_places(leaves: &[(u32, u32)], slots: usize) -> Vec<[u8; 2]> {
+    let mut place = Vec::with_capacity(slots);
+    for &(_, count) in leaves {
+        #[allow(clippy::cast_possible_truncation)]
+        place.extend((0..count).map(|k| [k as u8, count as u8]));
+    }
+    place
 }
 
 /// The non-empty leaves of the tree `(nodes, root)` as `(first slot, count)`, in slot order.

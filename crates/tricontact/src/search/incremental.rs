@@ -904,8 +904,9 @@ impl Bvh {
                 if count == 0 {
                     continue;
                 }
-                let corners = &self.corners[first..first + count];
-                let d2 = lanes::distances_squared(corners, &q.point).to_array();
+                let d2 = lanes::measure_leaf(self.leaf_rows(first), count, &q.point)
+                    .d2
+                    .to_array();
                 for (k, &d2) in d2.iter().enumerate().take(count) {
                     let facet = self.order[first + k];
                     if !q.excludes(surface, facet) && d2 <= bound(best) {

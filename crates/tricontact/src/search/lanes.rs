@@ -122,31 +122,6 @@ pub(crate) fn region(a: &[V; 3], b: &[V; 3], c: &[V; 3], pl: &[V; 3]) -> Region 
     }
 }
 
-/// Squared distances from `p` to the facets `corners[..]` (one to eight of them); lanes beyond
-/// `corners.len()` repeat the last facet.
-#[inline(always)]
-pub(crate) fn distances_squared(corners: &[[Vec3; 3]], p: &Vec3) -> V {
-    debug_assert!((1..=LANES).contains(&corners.len()));
-    let last = corners.len() - 1;
-    let padded: [&[Vec3; 3]; LANES] = std::array::from_fn(|k| &corners[k.min(last)]);
-    let corner = |v: usize| -> [V; 3] {
-        std::array::from_fn(|d| V::new(std::array::from_fn(|k| padded[k][v][d])))
-    };
-    let (a, b, c) = (corner(0), corner(1), corner(2));
-    let pl: [V; 3] = std::array::from_fn(|d| V::splat(p[d]));
-    let r = region(&a, &b, &c, &pl);
-    if r.bad == 0 {
-        return r.d2;
-    }
-    let mut out = r.d2.to_array();
-    for (k, [a, b, c]) in corners.iter().enumerate() {
-        if r.bad & (1 << k) != 0 {
-            out[k] = distance_squared_to_triangle(a, b, c, p);
-        }
-    }
-    V::new(out)
-}
-
 /// What a leaf's measurement gives per lane: the squared distance, the barycentric coordinates of
 /// the closest point and its feature (a number into [`FEATURES`], or [`RECOMPUTE`] for a lane the
 /// scalar kernel measured: its distance is right, its coordinates are to be recomputed).
@@ -161,15 +136,9 @@ pub(crate) struct Measured {
 pub(crate) const RECOMPUTE: u8 = 7;
 
 /// Measures `p` against the leaf of `count` facets whose rows start at `rows[0]` (see
-/// `Bvh::rows`; `corners` are the same facets' corners, read only for a lane the scalar kernel
-/// must redo). Lanes at and beyond `count` hold whatever follows and are to be ignored.
+/// `Bvh::rows`). Lanes at and beyond `count` hold whatever follows and are to be ignored.
 #[inline(always)]
-pub(crate) fn measure_leaf(
-    rows: &[f64],
-    count: usize,
-    corners: &[[Vec3; 3]],
-    p: &Vec3,
-) -> Measured {
+pub(crate) fn measure_leaf(rows: &[f64], count: usize, p: &Vec3) -> Measured {
     let corner = |v: usize| -> [V; 3] { std::array::from_fn(|d| row(rows, count, 3 * v + d)) };
     let (a, b, c) = (corner(0), corner(1), corner(2));
     let pl: [V; 3] = std::array::from_fn(|d| V::splat(p[d]));
@@ -183,9 +152,10 @@ pub(crate) fn measure_leaf(
     if bad != 0 {
         let mut d2 = r.d2.to_array();
         let mut code = measured.code.to_array();
-        for (k, [a, b, c]) in corners.iter().enumerate() {
+        for k in 0..count {
             if bad & (1 << k) != 0 {
-                d2[k] = distance_squared_to_triangle(a, b, c, p);
+                let [a, b, c] = leaf_corners(rows, count, k);
+                d2[k] = distance_squared_to_triangle(&a, &b, &c, p);
                 code[k] = f64::from(RECOMPUTE);
             }
         }
@@ -193,6 +163,13 @@ pub(crate) fn measure_leaf(
         measured.code = V::new(code);
     }
     measured
+}
+
+/// The corners of facet `k` of the leaf of `count` facets whose rows start at `rows[0]`.
+#[inline]
+pub(crate) fn leaf_corners(rows: &[f64], count: usize, k: usize) -> [Vec3; 3] {
+    let x = |r: usize| rows[r * count + k];
+    std::array::from_fn(|v| Vec3::new(x(3 * v), x(3 * v + 1), x(3 * v + 2)))
 }
 
 /// The feature of each lane as a number into [`FEATURES`]: the first mask set in priority order
@@ -495,19 +472,121 @@ pub(crate) fn clearly_valid(pairs: &Pairs, tolerance: f64) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::search::bvh::index;
     use crate::search::scenes::uniform;
 
-    fn check(corners: &[[Vec3; 3]], p: &Vec3) {
-        let lanes = distances_squared(corners, p).to_array();
-        for (k, [a, b, c]) in corners.iter().enumerate() {
-            let scalar = distance_squared_to_triangle(a, b, c, p);
-            assert_eq!(
-                lanes[k].to_bits(),
-                scalar.to_bits(),
-                "lane {k}: {} vs {scalar} for {corners:?}, {p:?}",
-                lanes[k]
-            );
+    /// The rows of one leaf (see `Bvh::rows`) holding `corners` as facets `0, 1, …`, followed by
+    /// `junk` (what lies past a leaf in the tree: other leaves' rows).
+    fn leaf_rows(corners: &[[Vec3; 3]], junk: f64) -> Vec<f64> {
+        let count = corners.len();
+        let mut rows = vec![junk; 10 * count + LANES];
+        for (k, x) in corners.iter().enumerate() {
+            for r in 0..9 {
+                rows[r * count + k] = x[r / 3][r % 3];
+            }
+            #[allow(clippy::cast_precision_loss)]
+            let facet = k as f64;
+            rows[9 * count + k] = facet;
         }
+        rows
+    }
+
+    /// One leaf through [`measure_leaf`] and [`LaneBest`] against the scalar kernel, bit for bit:
+    /// every lane's squared distance, and the winner (smallest distance, then index) with its
+    /// closest point; lanes past the leaf hold junk, NaN or not, which must not matter.
+    fn check(corners: &[[Vec3; 3]], p: &Vec3) {
+        for junk in [0.0, f64::NAN, 1e300, -3.5] {
+            let rows = leaf_rows(corners, junk);
+            let m = measure_leaf(&rows, corners.len(), p);
+            let lanes = m.d2.to_array();
+            let mut brute: Option<(f64, usize)> = None;
+            for (k, [a, b, c]) in corners.iter().enumerate() {
+                let scalar = distance_squared_to_triangle(a, b, c, p);
+                assert_eq!(
+                    lanes[k].to_bits(),
+                    scalar.to_bits(),
+                    "lane {k}: {} vs {scalar} for {corners:?}, {p:?}",
+                    lanes[k]
+                );
+                if brute.is_none_or(|(d2, _)| scalar < d2) {
+                    brute = Some((scalar, k));
+                }
+            }
+            let mut best = LaneBest::new(f64::INFINITY);
+            best.take_leaf(&rows, (0, corners.len()), &m, 3);
+            let w = best.best().expect("a winner");
+            let (d2, k) = brute.expect("a facet");
+            assert_eq!(
+                (w.d2.to_bits(), w.facet, w.slot),
+                (d2.to_bits(), index(k), index(k))
+            );
+            assert_eq!(w.leaf, Some(3));
+            let [a, b, c] = &corners[k];
+            let (got, want) = (
+                w.closest(&corners[k], p),
+                closest_point_on_triangle(a, b, c, p),
+            );
+            assert_eq!(got.feature, want.feature);
+            assert_eq!(got.distance.to_bits(), want.distance.to_bits());
+            for d in 0..3 {
+                assert_eq!(got.barycentric[d].to_bits(), want.barycentric[d].to_bits());
+                assert_eq!(got.point[d].to_bits(), want.point[d].to_bits());
+            }
+        }
+    }
+
+    /// Leaves offered one after another: the winner is the smallest distance, ties to the lowest
+    /// facet index, whichever lanes and leaves they came in; NaN lanes (excluded facets) and
+    /// lanes past a leaf are never taken; nothing within `max2` gives no winner.
+    #[test]
+    fn the_lane_wise_best_is_the_best_of_all_offers() {
+        let mut r = uniform(23);
+        let mut v = || Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5);
+        let pool: Vec<[Vec3; 3]> = (0..6).map(|_| [v(), v(), v()]).collect();
+        let p = v();
+        for trial in 0..300 {
+            // Leaves drawn from a small pool of facets, so that equal distances recur in the
+            // same lane and in different lanes, under different facet indices.
+            let mut best = LaneBest::new(f64::INFINITY);
+            let mut brute: Option<(f64, u32)> = None;
+            let mut slot = 0;
+            for leaf in 0..4 {
+                let count = 1 + (trial + leaf) % LANES;
+                let corners: Vec<[Vec3; 3]> = (0..count)
+                    .map(|k| pool[(trial * 7 + leaf * 3 + k * 5) % pool.len()])
+                    .collect();
+                let mut rows = leaf_rows(&corners, f64::NAN);
+                let mut m = measure_leaf(&rows, count, &p);
+                let mut d2 = m.d2.to_array();
+                for (k, d) in d2.iter_mut().enumerate().take(count) {
+                    // Facet numbers run backwards, so that a later offer may win a tie.
+                    let facet = 1000 - slot - index(k);
+                    rows[9 * count + k] = f64::from(facet);
+                    if (trial + k) % 11 == 0 {
+                        *d = f64::NAN;
+                    } else if brute.is_none_or(|b| (*d, facet) < b) {
+                        brute = Some((*d, facet));
+                    }
+                }
+                m.d2 = V::new(d2);
+                best.take_leaf(&rows, (slot as usize, count), &m, index(leaf));
+                slot += index(count);
+            }
+            let w = best.best().map(|w| (w.d2, w.facet));
+            assert_eq!(w, brute, "trial {trial}");
+        }
+        let mut none = LaneBest::new(1e-300);
+        let rows = leaf_rows(&pool[..2], 0.0);
+        none.take_leaf(&rows, (0, 2), &measure_leaf(&rows, 2, &p), 0);
+        assert!(none.best().is_none());
+        // A seed at exactly the limit is taken, and its closest point is recomputed.
+        let mut seeded = LaneBest::new(4.0);
+        seeded.seed(4.0, 9, 17);
+        let w = seeded.best().expect("the seed");
+        assert_eq!(
+            (w.d2, w.facet, w.slot, w.leaf, w.feature),
+            (4.0, 9, 17, None, RECOMPUTE)
+        );
     }
 
     /// Every pair through [`closest_pairs`] against the scalar kernel, bit for bit.

@@ -372,7 +372,7 @@ impl Bvh {
             *hit = match found {
                 Some(w) if w.d2 <= radius2 => Some(Hit {
                     facet: w.facet,
-                    closest: w.closest(&self.corners[w.slot as usize], &q.point),
+                    closest: w.closest(&self.slot_corners(w.slot), &q.point),
                 }),
                 // Not certified by the gathering: the full traversal, from what was found.
                 _ => {
@@ -444,6 +444,19 @@ impl Bvh {
 mod tests {
     use super::*;
     use crate::search::scenes::{near_surface, torus, uniform};
+
+    #[test]
+    fn compaction_keeps_the_masked_lanes_in_order() {
+        for mask in 0..256u32 {
+            let mut out = [u32::MAX; 8];
+            compact(mask, 40, &mut out);
+            let kept: Vec<u32> = (0..8)
+                .filter(|k| mask & (1 << k) != 0)
+                .map(|k| 40 + k)
+                .collect();
+            assert_eq!(out[..kept.len()], kept[..], "mask {mask:08b}");
+        }
+    }
 
     #[test]
     fn surface_order_is_coherent_and_a_shuffle_is_not() {

@@ -38,7 +38,7 @@ use rayon::prelude::*;
 use crate::closest::{ClosestPoint, closest_point_on_triangle, distance_squared_to_triangle};
 use crate::facet::Facet;
 use crate::linalg::Vec3;
-use crate::search::bvh::{Bvh, NO_SLOT, ROWS, index};
+use crate::search::bvh::{Bvh, NO_SLOT, index};
 use crate::search::lanes;
 use crate::search::node::{Child, EMPTY, as_leaf};
 use crate::search::surface::{Surface, SurfaceError};
@@ -188,7 +188,7 @@ impl Bvh {
         if slot == NO_SLOT || q.excludes(surface, facet) || !q.is_finite() {
             return None;
         }
-        let c = &self.corners[slot as usize];
+        let c = self.slot_corners(slot);
         Some(Candidate {
             d2: distance_squared_to_triangle(&c[0], &c[1], &c[2], &q.point),
             facet,
@@ -247,7 +247,7 @@ impl Bvh {
     /// The hit of a candidate of this tree, measured with the kernel.
     #[inline]
     pub(crate) fn finish(&self, c: Candidate, q: &Query) -> Hit {
-        c.finish(&self.corners[c.slot as usize], q)
+        c.finish(&self.slot_corners(c.slot), q)
     }
 
     /// Offers the facets of the leaf `first..first + count` (evaluated together, see
@@ -262,8 +262,7 @@ impl Bvh {
         max2: f64,
         best: &mut Option<Candidate>,
     ) {
-        let corners = &self.corners[first..first + count];
-        let d2 = lanes::measure_leaf(&self.rows[ROWS * first..], count, corners, &q.point).d2;
+        let d2 = lanes::measure_leaf(self.leaf_rows(first), count, &q.point).d2;
         // Only a facet at most as far as the best so far can win (a tie is decided by the index):
         // the others are passed over without a branch each or a look-up of their index.
         let limit = best.map_or(max2, |b| b.d2);
@@ -290,9 +289,8 @@ impl Bvh {
         leaf: u32,
         best: &mut lanes::LaneBest,
     ) {
-        let rows = &self.rows[ROWS * first..];
-        let corners = &self.corners[first..first + count];
-        let mut m = lanes::measure_leaf(rows, count, corners, &q.point);
+        let rows = self.leaf_rows(first);
+        let mut m = lanes::measure_leaf(rows, count, &q.point);
         if q.exclude.is_some() {
             // An excluded facet's lane is NaN, which is never taken.
             let mut d = m.d2.to_array();
@@ -320,7 +318,7 @@ impl Bvh {
             if let Some((first, count)) = as_leaf(child) {
                 for s in first..first + count {
                     let facet = self.order[s];
-                    let c = &self.corners[s];
+                    let c = self.slot_corners(index(s));
                     if !q.excludes(surface, facet)
                         && distance_squared_to_triangle(&c[0], &c[1], &c[2], &q.point) <= r2
                     {
