@@ -7,10 +7,11 @@
 //!    index, so the order is deterministic).
 //! 3. The topology follows from the sorted codes ([`crate::search::layout`]): binary splits at
 //!    Z-order cell boundaries, collapsed to four-wide nodes, stored depth-first.
-//! 4. The corner positions of every facet are copied in leaf order, so a query reads a leaf's
-//!    facets from one contiguous block, and the boxes (`search::node`) are filled
-//!    bottom-up from those copies, leaf boxes inflated by the search distance `r` (a parallel
-//!    recursion over subtrees, which are contiguous runs of nodes).
+//! 4. The corner positions of every facet are stored leaf by leaf, coordinate by coordinate (the
+//!    rows, in parallel over leaves), so a query reads each coordinate of a leaf's facets in one
+//!    vector load; the boxes (`search::node`) are filled bottom-up from the rows, leaf boxes
+//!    inflated by the search distance `r` (a parallel recursion over subtrees, which are
+//!    contiguous runs of nodes).
 //!
 //! # Refit and rebuild
 //! When nodes move, [`Bvh::update`] recomputes facet boxes and sweeps the boxes again (a refit,
@@ -229,7 +230,7 @@ impl Bvh {
         self.nodes.len()
     }
 
-    /// Fills every child box bottom-up from the corner copies (leaf boxes inflated by the search
+    /// Fills every child box bottom-up from the rows (leaf boxes inflated by the search
     /// distance), in parallel over subtrees, and the mean leaf diagonal; returns the refit-quality
     /// measure (sum of the children's half-areas).
     fn sweep(&mut self) -> f64 {

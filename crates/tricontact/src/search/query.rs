@@ -7,9 +7,10 @@
 //! squared distance to its box exceeds the best squared distance so far (with a relative margin of
 //! 1e-12, so that exact ties are never pruned). The facets of a leaf are measured together
 //! (`lanes`: the branch-free [`distance_squared_to_triangle`], bit for bit, up to eight
-//! facets at a time) on the corner copies the tree keeps in leaf order; only the winner is measured
-//! with the kernel's [`closest_point_on_triangle`], which says where its closest point lies (face,
-//! edge, vertex) and gives the reported distance.
+//! facets at a time) on the tree's rows (each leaf's corners coordinate by coordinate); only the
+//! winner is measured with the kernel's [`closest_point_on_triangle`], which says where its
+//! closest point lies (face, edge, vertex) and gives the reported distance. (Packets of coherent
+//! queries, `search::packet`, take the winner's closest point from the same lane arithmetic.)
 //!
 //! # Hints
 //! A query may start from a hint facet ([`Bvh::closest_with_hint`]): its exact squared distance is
@@ -49,9 +50,9 @@ thread_local! {
 }
 
 /// Queries per sequential chunk of [`Bvh::closest_all`] (packets and hints run within a chunk).
-/// A chunk's first packet is answered query by query (it has no gathering radius yet): with 1024
-/// queries that is one packet in 64 (256 was measured 3 % slower), and 10⁵ queries still make
-/// about a hundred chunks for the threads.
+/// A chunk's first query is answered by a traversal (it has no gathering radius yet): 1024 queries
+/// (256 was measured 3 % slower when a chunk's whole first packet was answered that way) still
+/// make about a hundred chunks of 10⁵ queries for the threads.
 pub const HINT_CHUNK: usize = 1024;
 
 /// Relative margin on squared distances below which a box is never pruned.
