@@ -24,7 +24,7 @@ use rayon::prelude::*;
 use crate::facet::Facet;
 use crate::linalg::Vec3;
 use crate::search::aabb::Aabb;
-use crate::search::lanes::{LANES, leaf_corners};
+use crate::search::lanes::{LANES, ROWS, leaf_corners, write_leaf};
 pub use crate::search::layout::LEAF_SIZE;
 pub(crate) use crate::search::layout::index;
 use crate::search::layout::{depth, layout};
@@ -34,9 +34,6 @@ use crate::search::surface::{Surface, SurfaceError};
 
 /// A refit whose box area grows past this factor of the area at build triggers a rebuild.
 pub const REBUILD_RATIO: f64 = 1.5;
-
-/// Rows per facet in [`Bvh::rows`]: nine coordinates and the facet index.
-pub(crate) const ROWS: usize = 10;
 
 /// The slot of a facet that is not in the tree.
 pub(crate) const NO_SLOT: u32 = u32::MAX;
@@ -169,11 +166,7 @@ impl Bvh {
                 let count = block.len() / ROWS;
                 for k in 0..count {
                     let facet = order[first + k];
-                    let x = surface.corners(facet, positions);
-                    for r in 0..9 {
-                        block[r * count + k] = x[r / 3][r % 3];
-                    }
-                    block[9 * count + k] = f64::from(facet);
+                    write_leaf(block, count, k, &surface.corners(facet, positions), facet);
                 }
             });
     }

@@ -165,7 +165,30 @@ pub(crate) fn measure_leaf(rows: &[f64], count: usize, p: &Vec3) -> Measured {
     measured
 }
 
-/// The corners of facet `k` of the leaf of `count` facets whose rows start at `rows[0]`.
+/// Rows per facet of a leaf's block (see `Bvh::rows`): nine coordinates, then the facet index.
+pub(crate) const ROWS: usize = 10;
+
+/// The row of a leaf's block holding the facet indices (as `f64`, exact).
+const FACET_ROW: usize = 9;
+
+/// Writes facet `k` of a leaf of `count` facets into the leaf's block of rows: coordinate
+/// `r = 3v + d` of corner `v` at `r count + k`, the facet index at `9 count + k`.
+#[inline]
+pub(crate) fn write_leaf(
+    block: &mut [f64],
+    count: usize,
+    k: usize,
+    corners: &[Vec3; 3],
+    facet: u32,
+) {
+    for r in 0..FACET_ROW {
+        block[r * count + k] = corners[r / 3][r % 3];
+    }
+    block[FACET_ROW * count + k] = f64::from(facet);
+}
+
+/// The corners of facet `k` of the leaf of `count` facets whose rows start at `rows[0]` (the
+/// inverse of [`write_leaf`]).
 #[inline]
 pub(crate) fn leaf_corners(rows: &[f64], count: usize, k: usize) -> [Vec3; 3] {
     let x = |r: usize| rows[r * count + k];
@@ -311,7 +334,7 @@ impl LaneBest {
         let (at, live) = (first as f64, count as f64);
         self.take(
             m,
-            row(rows, count, 9),
+            row(rows, count, FACET_ROW),
             V::splat(at) + lane(),
             f64::from(leaf),
             lane().simd_lt(V::splat(live)),
@@ -479,14 +502,9 @@ mod tests {
     /// `junk` (what lies past a leaf in the tree: other leaves' rows).
     fn leaf_rows(corners: &[[Vec3; 3]], junk: f64) -> Vec<f64> {
         let count = corners.len();
-        let mut rows = vec![junk; 10 * count + LANES];
+        let mut rows = vec![junk; ROWS * count + LANES];
         for (k, x) in corners.iter().enumerate() {
-            for r in 0..9 {
-                rows[r * count + k] = x[r / 3][r % 3];
-            }
-            #[allow(clippy::cast_precision_loss)]
-            let facet = k as f64;
-            rows[9 * count + k] = facet;
+            write_leaf(&mut rows, count, k, x, index(k));
         }
         rows
     }
@@ -561,7 +579,7 @@ mod tests {
                 for (k, d) in d2.iter_mut().enumerate().take(count) {
                     // Facet numbers run backwards, so that a later offer may win a tie.
                     let facet = 1000 - slot - index(k);
-                    rows[9 * count + k] = f64::from(facet);
+                    rows[FACET_ROW * count + k] = f64::from(facet);
                     if (trial + k) % 11 == 0 {
                         *d = f64::NAN;
                     } else if brute.is_none_or(|b| (*d, facet) < b) {
