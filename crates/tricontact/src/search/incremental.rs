@@ -46,7 +46,7 @@
 //! no subtraction per facet: 8 % faster at 10⁵ queries, medians of eight interleaved runs). The
 //! motions go into a buffer the calling thread keeps from call to call: at 10⁶ facets a new one
 //! (12 MB) was mapped and zeroed by the system at every call, and the motions and `δ` took two
-//! passes (4.5 ms of a 52 ms call on one core; now about 2.6 ms).
+//! passes (4.5 ms of a 52 ms call on one core; now 2.7 ms).
 //! Queries go in chunks of 256 (in parallel); within a chunk, eight at a time, their first
 //! listed facets are measured together (`search::lanes`) and written as the answers, and
 //! each query is screened: every facet the bounds cannot exclude is put aside (all exclusions are
