@@ -344,35 +344,48 @@ impl LaneBest {
     /// The smallest squared distance of all lanes (`max2` while nothing was taken).
     #[inline(always)]
     pub(crate) fn bound(&self) -> f64 {
-        let d = self.d2.to_array();
-        let m = |a: f64, b: f64| a.min(b);
-        m(
-            m(m(d[0], d[1]), m(d[2], d[3])),
-            m(m(d[4], d[5]), m(d[6], d[7])),
-        )
+        smallest(self.d2)
     }
 
-    /// The best over all lanes, `None` when nothing was taken.
+    /// The best over all lanes, `None` when nothing was taken: the smallest facet index among the
+    /// lanes at the smallest distance, from the lowest such lane (the same facet may sit in two
+    /// lanes, the seed's and a leaf's, with the same distance). Found without branches: two
+    /// horizontal minima and a mask.
     #[inline]
     #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
     pub(crate) fn best(&self) -> Option<Winner> {
         let d2 = self.bound();
         let tied = self.d2.simd_eq(V::splat(d2));
-        let facet = tied.select(self.facet, V::splat(f64::INFINITY)).to_array();
-        let k = (0..LANES).fold(0, |m, k| if facet[k] < facet[m] { k } else { m });
-        if facet[k] == f64::INFINITY {
+        let facets = tied.select(self.facet, V::splat(f64::INFINITY));
+        let facet = smallest(facets);
+        if facet == f64::INFINITY {
             return None;
         }
+        let k = facets
+            .simd_eq(V::splat(facet))
+            .to_bitmask()
+            .trailing_zeros() as usize;
         let leaf = self.leaf.as_array()[k];
         Some(Winner {
             d2,
-            facet: facet[k] as u32,
+            facet: facet as u32,
             slot: self.slot.as_array()[k] as u32,
             leaf: (leaf >= 0.0).then_some(leaf as u32),
             n: self.n.map(|n| n.as_array()[k]),
             feature: self.code.as_array()[k] as u8,
         })
     }
+}
+
+/// The smallest of eight lanes, none of them NaN (a tree of comparisons, no branch).
+#[inline(always)]
+fn smallest(v: V) -> f64 {
+    let d = v.to_array();
+    let m = |a: f64, b: f64| if b < a { b } else { a };
+    m(
+        m(m(d[0], d[1]), m(d[2], d[3])),
+        m(m(d[4], d[5]), m(d[6], d[7])),
+    )
 }
 
 /// Three coordinates of eight lanes as vectors.
