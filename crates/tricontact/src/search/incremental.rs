@@ -1075,6 +1075,43 @@ mod tests {
         }
     }
 
+    /// The motions pass: every node's `x − x₀` and the longest, across runs of nodes (NaN
+    /// wherever it is), into a buffer that held another call's motions, longer or shorter.
+    #[test]
+    fn the_motions_and_the_longest_come_from_one_pass_into_a_reused_buffer() {
+        let (nodes, facets) = torus(100, 60, 2.0, 0.6);
+        assert!(nodes.len() > 4096, "the nodes span several runs");
+        let surface = Surface::new(facets, nodes.len()).unwrap();
+        let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+        let queries = [Query::point(Vec3::new(2.0, 0.1, 0.7))];
+        let lists = Neighbourhoods::new(&bvh, &surface, &nodes, &queries, 0.1).unwrap();
+        let mut r = uniform(23);
+        let moved: Vec<Vec3> = nodes
+            .iter()
+            .map(|x| x + Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5) * 0.01)
+            .collect();
+        for junk in [
+            vec![Vec3::repeat(9.0); 2 * nodes.len()],
+            vec![Vec3::zeros(); 3],
+        ] {
+            let mut moves = junk;
+            let delta = lists.moves_into(&moved, &mut moves);
+            assert_eq!(moves.len(), nodes.len());
+            let mut longest: f64 = 0.0;
+            for ((m, x), x0) in moves.iter().zip(&moved).zip(&nodes) {
+                assert_eq!(*m, x - x0);
+                longest = longest.max(m.norm());
+            }
+            assert_eq!(delta.to_bits(), longest.to_bits());
+        }
+        for at in [0, 4095, 4096, nodes.len() - 1] {
+            let mut odd = moved.clone();
+            odd[at].z = f64::NAN;
+            let mut moves = Vec::new();
+            assert!(lists.moves_into(&odd, &mut moves).is_nan(), "NaN at {at}");
+        }
+    }
+
     /// Random facets (slivers among them), each node moved by just under the facet's robustness
     /// in the direction that shrinks the area most among random tries: still valid.
     #[test]
