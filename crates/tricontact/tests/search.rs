@@ -624,6 +624,42 @@ fn packets_survive_non_finite_queries() {
     }
 }
 
+/// A search distance that is NaN admits no facet, on every path (packets, single queries, hints,
+/// the Z-ordered batch), as in brute force.
+#[test]
+fn a_nan_search_distance_finds_nothing() {
+    // 6400 queries: enough for a shuffled batch to be answered in Z-order.
+    let (nodes, facets) = torus(80, 40, 2.0, 0.6);
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    let queries = near_surface(&nodes, &surface, 8, 0.1);
+    let mut shuffled = queries.clone();
+    let mut r = scenes::uniform(4);
+    for i in (1..shuffled.len()).rev() {
+        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+        let j = ((r() * (i + 1) as f64) as usize).min(i);
+        shuffled.swap(i, j);
+    }
+    for batch in [&queries, &shuffled] {
+        assert!(
+            bvh.closest_all(&surface, batch, f64::NAN)
+                .iter()
+                .all(Option::is_none)
+        );
+    }
+    for q in queries.iter().step_by(37) {
+        assert_eq!(bvh.closest(&surface, q, f64::NAN), None);
+        assert_eq!(bvh.closest_with_hint(&surface, q, Some(3), f64::NAN), None);
+        assert_eq!(brute_force_closest(&surface, &nodes, q, f64::NAN), None);
+    }
+    // The same queries with a finite distance do find facets: the NaN is what empties them.
+    assert!(
+        bvh.closest_all(&surface, &queries, 1.0)
+            .iter()
+            .all(Option::is_some)
+    );
+}
+
 /// A large batch in random order is answered in Z-order and put back: the same answers as the
 /// batch in surface order, as single queries and as brute force, with self-exclusion and a search
 /// distance, for any thread count.

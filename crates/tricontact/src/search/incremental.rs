@@ -990,7 +990,10 @@ fn longer(a: f64, b: f64) -> f64 {
 }
 
 thread_local! {
-    /// The node motions of the last call on this thread (see [`Neighbourhoods::closest_all_into`]).
+    /// The node motions of the last call on this thread (see [`Neighbourhoods::closest_all_into`]):
+    /// 24 bytes per surface node, held until the thread ends. A call takes the buffer out and puts
+    /// it back, so a call nested on the same thread (a rayon worker stealing another call's work
+    /// while it waits) finds it empty and uses one of its own.
     static MOVES: std::cell::Cell<Vec<Vec3>> = const { std::cell::Cell::new(Vec::new()) };
 }
 

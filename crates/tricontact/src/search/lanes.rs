@@ -377,7 +377,9 @@ impl LaneBest {
     }
 }
 
-/// The smallest of eight lanes, none of them NaN (a tree of comparisons, no branch).
+/// The smallest of eight lanes (a tree of comparisons, no branch). The lanes of a [`LaneBest`]
+/// are never NaN (a NaN offer is not taken) unless all are (a NaN search distance): the result is
+/// then NaN, as `f64::min` would give.
 #[inline(always)]
 fn smallest(v: V) -> f64 {
     let d = v.to_array();
