@@ -52,7 +52,9 @@
 //! each query is screened: every facet the bounds cannot exclude is put aside (all exclusions are
 //! against the first facet's distance; measuring others can only lower it). The queries whose
 //! lists must be walked beyond the record then walk them, their first further entries read all
-//! together so that their fetches from memory overlap. The facets put aside are then measured eight
+//! together so that their fetches from memory overlap, and prefetched as soon as a query is found
+//! to walk (the walks run at the chunk's end: on the 10⁶-facet torus the prefetch took a call from
+//! 53.1 to 49.5 ns per query, best of eight interleaved runs, and 53.6 to 51.6 in six more). The facets put aside are then measured eight
 //! at a time, and a better one replaces the answer. A query whose first
 //! listed facet is missing (empty list, or excluded by the query) goes through the same tests one
 //! facet at a time; a query at NaN or infinity has no answer, as in the tree.
@@ -640,6 +642,10 @@ impl Neighbourhoods {
                 if aside.len() > before || walk {
                     if walk {
                         walks.push((o, distance[k]));
+                        // Its further entries are read at the chunk's end: fetched from now on.
+                        if let Some(e) = self.entries.get(h.start as usize) {
+                            prefetch(e);
+                        }
                     }
                     open.push(Open {
                         place: index(c),
@@ -995,6 +1001,21 @@ thread_local! {
     /// it back, so a call nested on the same thread (a rayon worker stealing another call's work
     /// while it waits) finds it empty and uses one of its own.
     static MOVES: std::cell::Cell<Vec<Vec3>> = const { std::cell::Cell::new(Vec::new()) };
+}
+
+/// Asks the processor to bring `x`'s cache line closer: a hint, which reads nothing and for which
+/// nothing waits.
+#[inline(always)]
+fn prefetch<T>(x: &T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch reads no memory architecturally and cannot fault; `x` is a valid
+    // reference in any case.
+    unsafe {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        _mm_prefetch::<_MM_HINT_T0>(std::ptr::from_ref(x).cast());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = x;
 }
 
 /// `|v|₁ = |v_x| + |v_y| + |v_z| ≥ |v|`.
