@@ -55,7 +55,6 @@ pub struct Bvh {
     pub(crate) root: Child,
     /// Facet indices in leaf order.
     pub(crate) order: Vec<u32>,
-    /// Corner positions of `order[s]` at slot `s`.
     /// The corners leaf by leaf, row-major: coordinate `r = 3v + d` of corner `v` of slot
     /// `first + k` of the leaf `(first, count)` at `ROWS first + r count + k`, row 9 the facet
     /// index (as `f64`, exact), then eight zeros.

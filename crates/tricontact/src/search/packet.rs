@@ -51,9 +51,10 @@
 //! it are `None`). A chunk's first query is answered alone by a traversal; 1.25 times its answer
 //! distance, or the mean leaf diagonal if longer, is the first estimate (answering the whole
 //! first packet query by query instead cost about 2 % at 10⁶). A packet whose queries are spread
-//! out (random order) would gather too much: when the gathering exceeds [`MAX_LEAVES`] leaves it is abandoned and the packet is answered query by
-//! query, so an incoherent batch costs about what it costs without packets; so is a packet whose
-//! queries are spread over more than eight radii, without trying.
+//! out (random order) would gather too much: when the gathering exceeds [`MAX_LEAVES`] leaves it
+//! is abandoned and the packet is answered query by query, so an incoherent batch costs about what
+//! it costs without packets; so is a packet whose queries are spread over more than eight radii,
+//! without trying.
 
 use std::cell::RefCell;
 
