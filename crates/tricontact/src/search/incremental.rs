@@ -73,9 +73,11 @@
 //! distance then) lets most queries stop after their first facet. Measured on the benchmark's
 //! torus after a motion of 0.01 element sizes, one core: such a walk (from the previous answer,
 //! the scalar kernel on the facet and its neighbours, until none is nearer) measured 13.2 facets
-//! per query and took 228–232 ns per query at 10⁵ and 10⁶ facets (its answers all equal to the
+//! per query and took 220–235 ns per query at 10⁵ and 10⁶ facets (its answers all equal to the
 //! tree's on this smooth motion, none certified); at the lanes' cost per facet (a leaf of eight
-//! in about 35 ns) its 13.2 facets alone would take about 58 ns. The lists took 41–48 ns, certified.
+//! in about 35 ns) its 13.2 facets alone would take about 58 ns. The lists took 42–52 ns,
+//! certified, in the same runs (`search_loop walk` and `search_loop incremental`, examples of
+//! this crate).
 //!
 //! # Degenerate facets
 //! A query whose best listed facet is degenerate now is not certified (it falls back to the tree,
