@@ -130,7 +130,8 @@ fn walk(surface: &Surface, bvh: &Bvh, nodes: &[Vec3], queries: &[Query], h: f64,
                     for &g in surface.neighbours(f) {
                         let d = d2(g, &q.point);
                         measured += 1;
-                        if d < b || (d == b && g < f) {
+                        // The total order of the tree: distance, then facet index.
+                        if d < b || (d == b && g < next.unwrap_or(f)) {
                             (b, next) = (d, Some(g));
                         }
                     }
