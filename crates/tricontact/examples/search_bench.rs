@@ -40,17 +40,6 @@ fn near_surface(nodes: &[Vec3], facets: &[[u32; 3]], h: f64) -> Vec<Query> {
         .collect()
 }
 
-fn shuffled<T: Copy>(v: &[T]) -> Vec<T> {
-    let mut r = scenes::uniform(5);
-    let mut out = v.to_vec();
-    for i in (1..out.len()).rev() {
-        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
-        let j = (r() * (i + 1) as f64) as usize;
-        out.swap(i, j.min(i));
-    }
-    out
-}
-
 /// Best of `reps` wall-clock times of `f`, in seconds, with its last result.
 fn time<T>(reps: usize, mut f: impl FnMut() -> T) -> (f64, T) {
     let mut best = f64::INFINITY;
@@ -148,7 +137,8 @@ fn scene(nu: u32, nv: u32) {
     let h = std::f64::consts::TAU / f64::from(nv);
     let n = facets.len();
     let queries = near_surface(&nodes, &facets, h);
-    let random = shuffled(&queries);
+    let mut random = queries.clone();
+    scenes::shuffle(&mut random, 5);
     let nq = queries.len() as f64;
     println!(
         "\n## torus, {n} facets, {} query points, element size {h:.4}",

@@ -57,15 +57,15 @@ fn main() -> ExitCode {
         .into_iter()
         .map(Query::point)
         .collect();
-    if mode == "walk" {
-        walk(&surface, &bvh, &nodes, &queries, h, reps);
-        return ExitCode::SUCCESS;
-    }
-    let mut out = vec![None; queries.len()];
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
         .expect("a one-thread pool");
+    if mode == "walk" {
+        walk(&pool, &surface, &bvh, &nodes, &queries, (h, reps));
+        return ExitCode::SUCCESS;
+    }
+    let mut out = vec![None; queries.len()];
     let best = pool.install(|| {
         if mode == "closest" {
             best_of(reps, || {
@@ -99,9 +99,16 @@ fn main() -> ExitCode {
     ExitCode::SUCCESS
 }
 
-/// The neighbour walk after a motion of 0.01 element sizes, timed on one core against the tree's
-/// answers (see the module documentation).
-fn walk(surface: &Surface, bvh: &Bvh, nodes: &[Vec3], queries: &[Query], h: f64, reps: usize) {
+/// The neighbour walk after a motion of 0.01 element sizes `h`, timed on the one-thread `pool`
+/// (best of `reps` calls) against the tree's answers (see the module documentation).
+fn walk(
+    pool: &rayon::ThreadPool,
+    surface: &Surface,
+    bvh: &Bvh,
+    nodes: &[Vec3],
+    queries: &[Query],
+    (h, reps): (f64, usize),
+) {
     let before = bvh.closest_all(surface, queries, f64::INFINITY);
     let moved = scenes::deformed(nodes, h, 0.01);
     let mut tree = bvh.clone();
@@ -114,10 +121,6 @@ fn walk(surface: &Surface, bvh: &Bvh, nodes: &[Vec3], queries: &[Query], h: f64,
     };
     let mut ends = vec![None; queries.len()];
     let mut measured = 0usize;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .expect("a one-thread pool");
     let best = pool.install(|| {
         best_of(reps, || {
             measured = 0;

@@ -634,12 +634,7 @@ fn a_nan_search_distance_finds_nothing() {
     let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
     let queries = near_surface(&nodes, &surface, 8, 0.1);
     let mut shuffled = queries.clone();
-    let mut r = scenes::uniform(4);
-    for i in (1..shuffled.len()).rev() {
-        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
-        let j = ((r() * (i + 1) as f64) as usize).min(i);
-        shuffled.swap(i, j);
-    }
+    scenes::shuffle(&mut shuffled, 4);
     for batch in [&queries, &shuffled] {
         assert!(
             bvh.closest_all(&surface, batch, f64::NAN)
@@ -677,13 +672,8 @@ fn shuffled_batches_give_the_same_answers() {
         })
         .collect();
     queries.extend(near_surface(&nodes, &surface, 5, h));
-    let mut r = scenes::uniform(21);
     let mut order: Vec<usize> = (0..queries.len()).collect();
-    for i in (1..order.len()).rev() {
-        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
-        let j = ((r() * (i + 1) as f64) as usize).min(i);
-        order.swap(i, j);
-    }
+    scenes::shuffle(&mut order, 21);
     let shuffled: Vec<Query> = order.iter().map(|&i| queries[i]).collect();
     for max in [f64::INFINITY, 0.5 * h] {
         let ordered = bvh.closest_all(&surface, &queries, max);

@@ -464,7 +464,7 @@ impl Bvh {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::search::scenes::{near_surface, torus, uniform};
+    use crate::search::scenes::{near_surface, shuffle, torus};
 
     #[test]
     fn compaction_keeps_the_masked_lanes_in_order() {
@@ -493,12 +493,7 @@ mod tests {
         assert!(bvh.coherent(&queries));
         // Too small a batch is never reordered.
         assert!(bvh.coherent(&queries[..REORDER_MIN - 1]));
-        let mut r = uniform(8);
-        for i in (1..queries.len()).rev() {
-            #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
-            let j = ((r() * (i + 1) as f64) as usize).min(i);
-            queries.swap(i, j);
-        }
+        shuffle(&mut queries, 8);
         assert!(!bvh.coherent(&queries));
         assert!(bvh.coherent(&queries[..REORDER_MIN - 1]));
     }

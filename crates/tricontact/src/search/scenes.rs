@@ -72,6 +72,16 @@ pub fn uniform(seed: u64) -> impl FnMut() -> f64 {
     }
 }
 
+/// Shuffles `v` in place, the same way for the same `seed` (Fisher–Yates on [`uniform`]).
+pub fn shuffle<T>(v: &mut [T], seed: u64) {
+    let mut r = uniform(seed);
+    for i in (1..v.len()).rev() {
+        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+        let j = ((r() * (i + 1) as f64) as usize).min(i);
+        v.swap(i, j);
+    }
+}
+
 /// One point per facet, in facet order: a uniformly random point of the facet moved along the
 /// facet normal by a uniform offset in `[−spread, spread]` — query points near the surface.
 #[must_use]
@@ -110,4 +120,28 @@ pub fn deformed(nodes: &[Vec3], h: f64, a: f64) -> Vec<Vec3> {
             )
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_shuffle_is_a_permutation_fixed_by_its_seed() {
+        let shuffled = |seed: u64| {
+            let mut v: Vec<usize> = (0..1000).collect();
+            shuffle(&mut v, seed);
+            v
+        };
+        let a = shuffled(3);
+        assert_eq!(a, shuffled(3));
+        assert_ne!(a, shuffled(4));
+        let moved = a.iter().enumerate().filter(|&(i, &x)| i != x).count();
+        assert!(moved > 900, "only {moved} of 1000 moved");
+        let mut sorted = a;
+        sorted.sort_unstable();
+        assert_eq!(sorted, (0..1000).collect::<Vec<_>>());
+        let mut empty: [u8; 0] = [];
+        shuffle(&mut empty, 1);
+    }
 }
