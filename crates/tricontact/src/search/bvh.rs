@@ -57,7 +57,7 @@ pub struct Bvh {
     pub(crate) order: Vec<u32>,
     /// The corners leaf by leaf, row-major: coordinate `r = 3v + d` of corner `v` of slot
     /// `first + k` of the leaf `(first, count)` at `ROWS first + r count + k`, row 9 the facet
-    /// index (as `f64`, exact), then eight zeros.
+    /// index (as `f64`, exact), then one vector of zeros (a leaf's last row is read whole).
     pub(crate) rows: Vec<f64>,
     /// The leaves `(first slot, count)` in slot order (they cover every slot once).
     pub(crate) leaves: Vec<(u32, u32)>,

@@ -47,7 +47,8 @@
 //! motions go into a buffer the calling thread keeps from call to call: at 10⁶ facets a new one
 //! (12 MB) was mapped and zeroed by the system at every call, and the motions and `δ` took two
 //! passes (4.5 ms of a 52 ms call on one core; now 2.7 ms).
-//! Queries go in chunks of 256 (in parallel); within a chunk, eight at a time, their first
+//! Queries go in chunks of 256 (in parallel); within a chunk, one lane each (eight at a time
+//! with AVX-512, four otherwise: `search::lanes`), their first
 //! listed facets are measured together (`search::lanes`) and written as the answers, and
 //! each query is screened: every facet the bounds cannot exclude is put aside (all exclusions are
 //! against the first facet's distance; measuring others can only lower it). The queries whose
@@ -55,7 +56,7 @@
 //! together so that their fetches from memory overlap, and prefetched as soon as a query is found
 //! to walk (the walks run at the chunk's end: on the 10⁶-facet torus the prefetch took a call from
 //! 53.1 to 49.5 ns per query, best of eight interleaved runs, and 53.6 to 51.6 in six more). The
-//! facets put aside are then measured eight at a time, and a better one replaces the answer. A
+//! facets put aside are then measured a vector of lanes at a time, and a better one replaces the answer. A
 //! query whose first listed facet is missing (empty list, or excluded by the query) goes through
 //! the same tests one facet at a time; a query at NaN or infinity has no answer, as in the tree.
 //!
@@ -89,14 +90,13 @@
 //! every query measures those that are valid now.
 
 use rayon::prelude::*;
-use wide::f64x8;
 
 use crate::closest::{ClosestPoint, closest_point_and_distance_squared};
 use crate::facet::{DEGENERACY_TOLERANCE, Facet};
 use crate::linalg::Vec3;
 use crate::search::bvh::{Bvh, Update};
 use crate::search::direction::Direction;
-use crate::search::lanes::{self, PAIRS, Pairs};
+use crate::search::lanes::{self, PAIRS, Pairs, V};
 use crate::search::layout::index;
 use crate::search::node::{Child, as_leaf, round_down};
 use crate::search::query::{HINT_CHUNK, TIE_MARGIN, check_answers, farthest_first};
@@ -596,7 +596,7 @@ impl Neighbourhoods {
             } else {
                 lanes::clearly_valid(&pairs, 2.0 * DEGENERACY_TOLERANCE) & live
             };
-            let b = lanes_distance.unwrap_or_else(|| f64x8::new(distance));
+            let b = lanes_distance.unwrap_or_else(|| V::new(distance));
             let screen = stage.screen(&pairs.points, b, limits);
             let screenable = if shared.valid.is_empty() { live } else { 0 };
             // Certified at once: the usual case.
@@ -739,7 +739,7 @@ impl Neighbourhoods {
         aside.len() - before
     }
 
-    /// Measures the (query, facet) pairs put aside, eight at a time, each against its query's best
+    /// Measures the (query, facet) pairs put aside, [`PAIRS`] at a time, each against its query's best
     /// in the tree's order; a better facet is written into the query's answer (and is to be checked
     /// for degeneracy: `clear` off).
     fn measure_aside(

@@ -1,21 +1,42 @@
-//! The kernel's Voronoi-region computation lane by lane: the up to eight facets of a tree leaf
-//! against one point, or eight (point, facet) pairs at once (the incremental search).
+//! The kernel's Voronoi-region computation lane by lane: the up to [`LANES`] facets of a tree
+//! leaf against one point, or [`LANES`] (point, facet) pairs at once (the incremental search).
 //!
 //! The arithmetic is exactly that of [`distance_squared_to_triangle`], operation for operation:
 //! the six dot products `d1 … d6` of the edges `ab`, `ac` with `p − a`, `p − b`, `p − c`, the
 //! three scaled sub-areas `va, vb, vc`, the edge parameters and the face's barycentric coordinates,
 //! and finally `|p − (a N_a + b N_b + c N_c)|²`. The scalar kernel picks the first Voronoi region
 //! whose test holds (vertices, then edges, then the face); here every lane computes every
-//! candidate and selects by the same priority, without branches, one `wide::f64x8` per quantity
-//! (an AVX-512 register where the target has it, two AVX registers otherwise; with four lanes,
-//! `wide` was measured 1.5–1.7× faster than the same code on `[f64; 4]` arrays, which the compiler
-//! left scalar, and on this machine eight lanes cost what four do). The results are bit
-//! for bit those of the scalar kernel (no fused multiply–add on either side): the tree compares
-//! exactly the numbers the brute-force search compares. A lane whose selected coordinates are not
-//! finite (extreme coordinates, where the scalar kernel rescales) is recomputed with the scalar
-//! kernel. One body ([`region`]) serves both uses.
+//! candidate and selects by the same priority, without branches, one vector [`V`] per quantity.
+//! The results are bit for bit those of the scalar kernel (no fused multiply–add on either side):
+//! the tree compares exactly the numbers the brute-force search compares. A lane whose selected
+//! coordinates are not finite (extreme coordinates, where the scalar kernel rescales) is
+//! recomputed with the scalar kernel. One body ([`region`]) serves both uses.
+//!
+//! # Lane width
+//! One measurement is one machine register per quantity: eight lanes (`wide::f64x8`) where the
+//! build targets AVX-512, four (`wide::f64x4`, one AVX register) otherwise. The width sets the
+//! leaves' size ([`crate::search::LEAF_SIZE`]) and the incremental search's groups. With four
+//! lanes, `wide` was measured 1.5–1.7× faster than the same code on `[f64; 4]` arrays, which the
+//! compiler left scalar. On an AVX-512 machine, leaves of eight in one `f64x8` were 15 % faster to
+//! query than leaves of four (its units do eight lanes in the time of four). Without AVX-512 an
+//! `f64x8` is two AVX registers, the region arithmetic's thirty-odd live vectors no longer fit in
+//! the sixteen registers and spill to the stack: on an AMD EPYC (Zen 3, AVX2), leaves of four in
+//! `f64x4` answered coherent queries 10 % faster than leaves of eight (532 → 478 ns at 10⁵ facets,
+//! 567 → 512 ns at 10⁶, `search_loop closest`, interleaved runs), and the incremental search's
+//! groups of four cost what groups of eight did (within 3 %). Building with
+//! `RUSTFLAGS="-C target-cpu=native --cfg tricontact_eight_lanes"` makes the lanes eight wide on
+//! any machine: to test that width where it is not the default, and to repeat the comparison.
 
-use wide::f64x8;
+#[cfg(not(any(
+    all(target_arch = "x86_64", target_feature = "avx512f"),
+    tricontact_eight_lanes
+)))]
+use wide::f64x4 as Vector;
+#[cfg(any(
+    all(target_arch = "x86_64", target_feature = "avx512f"),
+    tricontact_eight_lanes
+))]
+use wide::f64x8 as Vector;
 
 use crate::closest::{
     ClosestPoint, Feature, closest_point_and_distance_squared, closest_point_on_triangle,
@@ -23,14 +44,15 @@ use crate::closest::{
 };
 use crate::linalg::Vec3;
 
-/// Facets of one leaf evaluated together.
-pub(crate) const LANES: usize = 8;
+/// One quantity of every lane: the facets of a leaf, or the pairs of [`closest_pairs`].
+pub(crate) type V = Vector;
 
-/// One coordinate of eight facets.
-pub(crate) type V = f64x8;
+/// Lanes of one measurement: facets of one leaf evaluated together (eight with AVX-512, four
+/// otherwise; see the module documentation).
+pub(crate) const LANES: usize = std::mem::size_of::<V>() / std::mem::size_of::<f64>();
 
-/// (point, facet) pairs evaluated together by [`closest_pairs`].
-pub(crate) const PAIRS: usize = 8;
+/// (point, facet) pairs evaluated together by [`closest_pairs`]: one lane each.
+pub(crate) const PAIRS: usize = LANES;
 
 /// Lane-wise dot product, summed as nalgebra sums a 3-vector dot: `(x·x + y·y) + z·z`.
 #[inline(always)]
@@ -208,18 +230,23 @@ fn feature_codes(masks: &[V; 6]) -> V {
     code
 }
 
-/// Row `r` of a leaf of `count` facets whose rows start at `rows[0]`: eight lanes, the first
-/// `count` of them the leaf's.
+/// Row `r` of a leaf of `count` facets whose rows start at `rows[0]`: [`LANES`] lanes, the
+/// first `count` of them the leaf's.
 #[inline(always)]
 pub(crate) fn row(rows: &[f64], count: usize, r: usize) -> V {
     let at = r * count;
-    V::new(rows[at..at + LANES].try_into().expect("eight lanes"))
+    V::new(
+        rows[at..at + LANES]
+            .try_into()
+            .expect("one vector of lanes"),
+    )
 }
 
-/// Lane numbers `0, 1, …, 7`.
+/// Lane numbers `0, 1, …, LANES − 1`.
 #[inline(always)]
 fn lane() -> V {
-    V::new([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0])
+    #[allow(clippy::cast_precision_loss)]
+    V::new(std::array::from_fn(|k| k as f64))
 }
 
 /// The best facet in each lane over the leaves offered so far, in the order (squared distance,
@@ -288,7 +315,7 @@ impl LaneBest {
     /// recomputed).
     #[inline]
     pub(crate) fn seed(&mut self, d2: f64, facet: u32, slot: u32) {
-        let one = |v: f64| V::new([v, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        let one = |v: f64| V::new(std::array::from_fn(|k| if k == 0 { v } else { 0.0 }));
         let measured = Measured {
             d2: one(d2),
             n: [V::ZERO; 3],
@@ -377,26 +404,30 @@ impl LaneBest {
     }
 }
 
-/// The smallest of eight lanes (a tree of comparisons, no branch). The lanes of a [`LaneBest`]
+/// The smallest of the lanes (a tree of comparisons, no branch). The lanes of a [`LaneBest`]
 /// are never NaN (a NaN offer is not taken) unless all are (a NaN search distance): the result is
 /// then NaN, as `f64::min` would give.
 #[inline(always)]
 fn smallest(v: V) -> f64 {
-    let d = v.to_array();
     let m = |a: f64, b: f64| if b < a { b } else { a };
-    m(
-        m(m(d[0], d[1]), m(d[2], d[3])),
-        m(m(d[4], d[5]), m(d[6], d[7])),
-    )
+    let mut d = v.to_array();
+    let mut half = LANES / 2;
+    while half > 0 {
+        for k in 0..half {
+            d[k] = m(d[k], d[k + half]);
+        }
+        half /= 2;
+    }
+    d[0]
 }
 
-/// Three coordinates of eight lanes as vectors.
+/// Three coordinates of the lanes as vectors.
 #[inline(always)]
-pub(crate) fn load(v: &[[f64; PAIRS]; 3]) -> [f64x8; 3] {
-    [f64x8::new(v[0]), f64x8::new(v[1]), f64x8::new(v[2])]
+pub(crate) fn load(v: &[[f64; PAIRS]; 3]) -> [V; 3] {
+    [V::new(v[0]), V::new(v[1]), V::new(v[2])]
 }
 
-/// Eight (point, facet) pairs, coordinate by coordinate: `corners[v][d][k]` is coordinate `d` of
+/// [`PAIRS`] (point, facet) pairs, coordinate by coordinate: `corners[v][d][k]` is coordinate `d` of
 /// corner `v` of pair `k`'s facet, `points[d][k]` coordinate `d` of its point.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct Pairs {
@@ -452,7 +483,7 @@ pub(crate) fn closest_pairs(
     pairs: &Pairs,
     live: u32,
     mut emit: impl FnMut(usize, ClosestPoint, f64),
-) -> Option<f64x8> {
+) -> Option<V> {
     let (a, b, c) = (
         load(&pairs.corners[0]),
         load(&pairs.corners[1]),
@@ -460,8 +491,8 @@ pub(crate) fn closest_pairs(
     );
     let r = region(&a, &b, &c, &load(&pairs.points));
     let distance_lanes = r.d2.sqrt();
-    let n = r.n.map(f64x8::to_array);
-    let point = r.point.map(f64x8::to_array);
+    let n = r.n.map(V::to_array);
+    let point = r.point.map(V::to_array);
     let d2 = r.d2.to_array();
     let distance = distance_lanes.to_array();
     let code = feature_codes(&r.masks).trunc_int().to_array();
@@ -501,9 +532,9 @@ pub(crate) fn clearly_valid(pairs: &Pairs, tolerance: f64) -> u32 {
     ];
     let w2 = dot(&w, &w);
     let longest = dot(&ab, &ab).max(dot(&ac, &ac)).max(dot(&bc, &bc));
-    let floor = longest * longest * f64x8::splat(tolerance * tolerance);
-    let normal = w2.simd_ge(f64x8::splat(4.0 * f64::MIN_POSITIVE))
-        & w2.simd_le(f64x8::splat(0.25 * f64::MAX));
+    let floor = longest * longest * V::splat(tolerance * tolerance);
+    let normal =
+        w2.simd_ge(V::splat(4.0 * f64::MIN_POSITIVE)) & w2.simd_le(V::splat(0.25 * f64::MAX));
     (w2.simd_gt(floor) & floor.is_finite() & normal).to_bitmask()
 }
 

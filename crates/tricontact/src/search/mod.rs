@@ -5,11 +5,11 @@
 //! * [`bvh`]: the bounding-volume hierarchy (parallel build, refit, rebuild on degraded quality);
 //! * [`layout`]: its topology (Morton splits collapsed to four-wide nodes); `node`: its nodes;
 //! * [`query`]: closest facet and facets within a distance, parallel over nodes, deterministic,
-//!   optionally from a hint facet; `lanes`: a leaf's eight facets measured at once;
+//!   optionally from a hint facet; `lanes`: a leaf's facets measured at once, one per lane;
 //! * [`packet`]: coherent batches, a packet of consecutive queries sharing one traversal;
 //! * [`incremental`]: answers again after a small motion from per-query neighbourhood lists, with
-//!   a certificate from the motion, and tree fallback; `screen`: its bounds for eight queries at
-//!   once; `direction`: unit vectors in three bytes.
+//!   a certificate from the motion, and tree fallback; `screen`: its bounds for a vector of
+//!   queries at once; `direction`: unit vectors in three bytes.
 //!
 //! The search uses the kernel's closest-point query, so each answer says whether the node faces the
 //! interior, an edge or a vertex of its facet.

@@ -1,19 +1,18 @@
-//! The incremental search's bounds for eight queries at once: which of the facets listed after a
+//! The incremental search's bounds for a vector of queries at once (one per lane: eight with
+//! AVX-512, four otherwise): which of the facets listed after a
 //! query's first are excluded by the Lipschitz bound `d₀(f) − m` or by the first-order bound
 //! `d₀(f) + n̂(f)·(p − p₀ − T) − s − slack`, and whether the rest of its list and the unlisted
 //! facets are excluded (the formulas and their margins: [`crate::search::incremental`]).
 //!
 //! [`Bounds`] is the scalar form, one query at a time (the walks beyond a query's record, and the
-//! queries answered one facet at a time). For eight queries at once, their values are put into
+//! queries answered one facet at a time). For the lanes' queries at once, their values are put into
 //! lane `k` of a [`Stage`] (plain stores), and the same tests, operation for operation, run on
-//! `wide::f64x8` without a branch per test; the results are bit masks over the lanes. Any NaN
+//! the lanes' vectors (`lanes::V`) without a branch per test; the results are bit masks over the lanes. Any NaN
 //! makes a test fail, so it excludes nothing.
-
-use wide::f64x8;
 
 use crate::linalg::Vec3;
 use crate::search::direction::DIRECTION_ERROR;
-use crate::search::lanes::{PAIRS, load};
+use crate::search::lanes::{PAIRS, V, load};
 
 /// Relative margin of the certificate, on the magnitude of the coordinates and distances.
 pub(crate) const MARGIN: f64 = 1e-9;
@@ -31,7 +30,7 @@ pub(crate) struct Listed {
     pub(crate) spread: f64,
 }
 
-/// The values of eight queries, lane by lane.
+/// The values of [`PAIRS`] queries, lane by lane.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct Stage {
     /// The query point when the lists were made, `p₀`.
@@ -140,31 +139,31 @@ impl Stage {
     /// Screens the lanes whose query points are `p` (coordinate by coordinate) and whose first
     /// listed facets are at the distances `b` now: [`Bounds`] lane by lane.
     #[inline]
-    pub(crate) fn screen(&self, p: &[[f64; PAIRS]; 3], b: f64x8, limits: Limits) -> Outcome {
-        let w = |a: &[f64; PAIRS]| f64x8::new(*a);
-        let zero = f64x8::ZERO;
+    pub(crate) fn screen(&self, p: &[[f64; PAIRS]; 3], b: V, limits: Limits) -> Outcome {
+        let w = |a: &[f64; PAIRS]| V::new(*a);
+        let zero = V::ZERO;
         let (p, p0) = (load(p), load(&self.point));
         let dp = [p[0] - p0[0], p[1] - p0[1], p[2] - p0[2]];
-        let m = (dp[0] * dp[0] + dp[1] * dp[1] + dp[2] * dp[2]).sqrt() + f64x8::splat(limits.delta);
-        let amax = |v: &[f64x8; 3]| v[0].abs().fast_max(v[1].abs()).fast_max(v[2].abs());
+        let m = (dp[0] * dp[0] + dp[1] * dp[1] + dp[2] * dp[2]).sqrt() + V::splat(limits.delta);
+        let amax = |v: &[V; 3]| v[0].abs().fast_max(v[1].abs()).fast_max(v[2].abs());
         let reach = w(&self.reach);
         let finite = reach.is_finite().select(reach, zero);
-        let tol = f64x8::splat(MARGIN) * (amax(&p) + amax(&p0) + finite);
-        let beyond = |d0: f64x8| (d0 - m).simd_gt(b + tol);
+        let tol = V::splat(MARGIN) * (amax(&p) + amax(&p0) + finite);
+        let beyond = |d0: V| (d0 - m).simd_gt(b + tol);
         let mut need = [0u32; NEAR];
         for (j, need) in need.iter_mut().enumerate() {
             let d0 = w(&self.distance[j]);
             let (t, u) = (load(&self.translation[j]), load(&self.direction[j]));
             let v = [dp[0] - t[0], dp[1] - t[1], dp[2] - t[2]];
             let l1 = v[0].abs() + v[1].abs() + v[2].abs();
-            let slack = tol + f64x8::splat(DIRECTION_ERROR) * l1;
+            let slack = tol + V::splat(DIRECTION_ERROR) * l1;
             let along = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
             let lower = d0 + along - w(&self.spread[j]) - slack;
             *need = (!(beyond(d0) | lower.simd_gt(b))).to_bitmask();
         }
         // Facets not listed are farther than `reach − m` now.
         let limit = reach - m - tol;
-        let unlisted = b.simd_lt(limit) | f64x8::splat(limits.max_distance).simd_lt(limit);
+        let unlisted = b.simd_lt(limit) | V::splat(limits.max_distance).simd_lt(limit);
         Outcome {
             need,
             later: beyond(w(&self.after)).to_bitmask(),
@@ -217,7 +216,7 @@ mod tests {
                 b[k] = first;
                 lanes.push((Bounds::new(&q, &p0, reach, limits.delta), listed, after));
             }
-            let out = stage.screen(&p, f64x8::new(b), limits);
+            let out = stage.screen(&p, V::new(b), limits);
             for (k, (bounds, listed, after)) in lanes.iter().enumerate() {
                 let bit = |mask: u32| mask & (1 << k) != 0;
                 for (j, l) in listed.iter().enumerate() {
