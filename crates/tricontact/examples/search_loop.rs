@@ -8,6 +8,7 @@
 //! cargo run --release -p tricontact --example search_loop -- closest 316 15
 //! cargo run --release -p tricontact --example search_loop -- incremental 1000 20
 //! cargo run --release -p tricontact --example search_loop -- walk 1000 5
+//! cargo run --release -p tricontact --example search_loop -- build 1000 5
 //! ```
 //!
 //! The scene is `search_bench`'s: a torus of `nu × nu/2` quads split in two (316 gives 99 856
@@ -18,7 +19,8 @@
 //! the incremental search does not take: from each query's facet before the motion, a walk to
 //! nearer facets sharing a node ([`Surface::neighbours`], the scalar kernel on the facet and all its
 //! neighbours, until none is nearer), and counts the facets it measures and the answers that
-//! differ from the tree's (a walk certifies none of them). Expected output (the time varies with
+//! differ from the tree's (a walk certifies none of them). `build` times [`Bvh::build`] and
+//! `refit` [`Bvh::update`] (the torus and its deformed copy in turn), per facet. Expected output (the time varies with
 //! the machine):
 //!
 //! ```text
@@ -33,8 +35,7 @@ use tricontact::search::scenes::{self, torus};
 use tricontact::search::{Bvh, Neighbourhoods, Query, Surface};
 use tricontact::{Vec3, distance_squared_to_triangle};
 
-const USAGE: &str =
-    "usage: search_loop closest|incremental|walk [nu ≥ 8, default 316] [reps ≥ 1, default 15]";
+const USAGE: &str = "usage: search_loop closest|incremental|walk|build|refit [nu ≥ 8, default 316] [reps ≥ 1, default 15]";
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -45,7 +46,10 @@ fn main() -> ExitCode {
         eprintln!("{USAGE}");
         return ExitCode::FAILURE;
     };
-    if nu < 8 || reps == 0 || !matches!(mode, "closest" | "incremental" | "walk") {
+    if nu < 8
+        || reps == 0
+        || !matches!(mode, "closest" | "incremental" | "walk" | "build" | "refit")
+    {
         eprintln!("{USAGE}");
         return ExitCode::FAILURE;
     }
@@ -63,6 +67,30 @@ fn main() -> ExitCode {
         .expect("a one-thread pool");
     if mode == "walk" {
         walk(&pool, &surface, &bvh, &nodes, &queries, (h, reps));
+        return ExitCode::SUCCESS;
+    }
+    if mode == "build" || mode == "refit" {
+        let moved = scenes::deformed(&nodes, h, 0.01);
+        let mut tree = bvh.clone();
+        let best = pool.install(|| {
+            if mode == "build" {
+                best_of(reps, || {
+                    std::hint::black_box(Bvh::build(&surface, &nodes, 0.0).expect("a tree"));
+                })
+            } else {
+                let mut k = 0;
+                best_of(reps, || {
+                    k += 1;
+                    let at = if k % 2 == 0 { &nodes } else { &moved };
+                    tree.update(&surface, at).expect("positions for every node");
+                })
+            }
+        });
+        println!(
+            "{mode}, {} facets: {:.1} ns per facet (best of {reps} calls, one core)",
+            facets.len(),
+            best * 1e9 / facets.len() as f64
+        );
         return ExitCode::SUCCESS;
     }
     let mut out = vec![None; queries.len()];

@@ -24,7 +24,7 @@ use rayon::prelude::*;
 use crate::facet::Facet;
 use crate::linalg::Vec3;
 use crate::search::aabb::Aabb;
-use crate::search::lanes::{LANES, ROWS, leaf_corners, write_leaf};
+use crate::search::lanes::{LANES, ROWS, groups, leaf_corners, write_leaf};
 pub use crate::search::layout::LEAF_SIZE;
 pub(crate) use crate::search::layout::index;
 use crate::search::layout::{depth, layout};
@@ -55,13 +55,14 @@ pub struct Bvh {
     pub(crate) root: Child,
     /// Facet indices in leaf order.
     pub(crate) order: Vec<u32>,
-    /// The corners leaf by leaf, row-major: coordinate `r = 3v + d` of corner `v` of slot
-    /// `first + k` of the leaf `(first, count)` at `ROWS first + r count + k`, row 9 the facet
-    /// index (as `f64`, exact), then one vector of zeros (a leaf's last row is read whole).
+    /// The corners group by group (a leaf's groups of at most `LANES` facets, see
+    /// [`groups`]), row-major: coordinate `r = 3v + d` of corner `v` of slot `first + k` of the
+    /// group `(first, count)` at `ROWS first + r count + k`, row 9 the facet index (as `f64`,
+    /// exact), then one vector of zeros (a group's last row is read whole).
     pub(crate) rows: Vec<f64>,
     /// The leaves `(first slot, count)` in slot order (they cover every slot once).
     pub(crate) leaves: Vec<(u32, u32)>,
-    /// Each slot's lane in its leaf and the leaf's count.
+    /// Each slot's lane in its group and the group's count.
     pub(crate) place: Vec<[u8; 2]>,
     /// Slot of each facet in `order`, [`NO_SLOT`] for a degenerate facet.
     pub(crate) slot: Vec<u32>,
@@ -150,13 +151,15 @@ impl Bvh {
             ..
         } = self;
         rows.resize(ROWS * order.len() + LANES, 0.0);
-        // Each leaf's block of rows, cut off in slot order.
+        // Each group's block of rows, cut off in slot order.
         let mut blocks = Vec::with_capacity(leaves.len());
         let mut rest = rows.as_mut_slice();
         for &(first, count) in leaves.iter() {
-            let (block, tail) = rest.split_at_mut(ROWS * count as usize);
-            blocks.push((block, first as usize));
-            rest = tail;
+            for (first, count) in groups(first as usize, count as usize) {
+                let (block, tail) = rest.split_at_mut(ROWS * count);
+                blocks.push((block, first));
+                rest = tail;
+            }
         }
         blocks
             .into_par_iter()
@@ -170,7 +173,7 @@ impl Bvh {
             });
     }
 
-    /// The rows of the leaf whose first slot is `first`.
+    /// The rows of the group (see [`groups`]) whose first slot is `first`.
     #[inline]
     pub(crate) fn leaf_rows(&self, first: usize) -> &[f64] {
         &self.rows[ROWS * first..]
@@ -291,13 +294,15 @@ impl Measure {
 /// coordinate's bounds over the leaf's three rows of it (the corners of a facet in the tree are
 /// finite).
 fn leaf_box(rows: &[f64], first: usize, count: usize, inflation: f64) -> Aabb {
-    let block = &rows[ROWS * first..ROWS * (first + count)];
     let mut b = Aabb::EMPTY;
-    for v in 0..3 {
-        for d in 0..3 {
-            for &x in &block[(3 * v + d) * count..(3 * v + d + 1) * count] {
-                b.min[d] = b.min[d].min(x);
-                b.max[d] = b.max[d].max(x);
+    for (first, count) in groups(first, count) {
+        let block = &rows[ROWS * first..ROWS * (first + count)];
+        for v in 0..3 {
+            for d in 0..3 {
+                for &x in &block[(3 * v + d) * count..(3 * v + d + 1) * count] {
+                    b.min[d] = b.min[d].min(x);
+                    b.max[d] = b.max[d].max(x);
+                }
             }
         }
     }
@@ -375,12 +380,15 @@ fn nodes_len(runs: &[(usize, &mut [Node], usize)]) -> usize {
     runs.iter().map(|(_, r, _)| r.len()).sum()
 }
 
-/// Each slot's `[lane in its leaf, the leaf's count]`, for `slots` slots covered by `leaves`.
+/// Each slot's `[lane in its group, the group's count]` (see [`groups`]), for `slots` slots
+/// covered by `leaves`.
 fn leaf_places(leaves: &[(u32, u32)], slots: usize) -> Vec<[u8; 2]> {
     let mut place = Vec::with_capacity(slots);
-    for &(_, count) in leaves {
-        #[allow(clippy::cast_possible_truncation)]
-        place.extend((0..count).map(|k| [k as u8, count as u8]));
+    for &(first, count) in leaves {
+        for (_, count) in groups(first as usize, count as usize) {
+            #[allow(clippy::cast_possible_truncation)]
+            place.extend((0..count).map(|k| [k as u8, count as u8]));
+        }
     }
     place
 }

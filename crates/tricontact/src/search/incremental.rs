@@ -941,14 +941,16 @@ impl Bvh {
                 if count == 0 {
                     continue;
                 }
-                let d2 = lanes::measure_leaf(self.leaf_rows(first), count, &q.point)
-                    .d2
-                    .to_array();
-                for (k, &d2) in d2.iter().enumerate().take(count) {
-                    let facet = self.order[first + k];
-                    if !q.excludes(surface, facet) && d2 <= bound(best) {
-                        best = best.min(d2);
-                        found.push((d2, facet));
+                for (first, count) in lanes::groups(first, count) {
+                    let d2 = lanes::measure_leaf(self.leaf_rows(first), count, &q.point)
+                        .d2
+                        .to_array();
+                    for (k, &d2) in d2.iter().enumerate().take(count) {
+                        let facet = self.order[first + k];
+                        if !q.excludes(surface, facet) && d2 <= bound(best) {
+                            best = best.min(d2);
+                            found.push((d2, facet));
+                        }
                     }
                 }
                 continue;

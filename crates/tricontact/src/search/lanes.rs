@@ -14,16 +14,16 @@
 //!
 //! # Lane width
 //! One measurement is one machine register per quantity: eight lanes (`wide::f64x8`) where the
-//! build targets AVX-512, four (`wide::f64x4`, one AVX register) otherwise. The width sets the
-//! leaves' size ([`crate::search::LEAF_SIZE`]) and the incremental search's groups. With four
-//! lanes, `wide` was measured 1.5–1.7× faster than the same code on `[f64; 4]` arrays, which the
-//! compiler left scalar. On an AVX-512 machine, leaves of eight in one `f64x8` were 15 % faster to
-//! query than leaves of four (its units do eight lanes in the time of four). Without AVX-512 an
-//! `f64x8` is two AVX registers, the region arithmetic's thirty-odd live vectors no longer fit in
-//! the sixteen registers and spill to the stack: on an AMD EPYC (Zen 3, AVX2), leaves of four in
-//! `f64x4` answered coherent queries 10 % faster than leaves of eight (532 → 478 ns at 10⁵ facets,
-//! 567 → 512 ns at 10⁶, `search_loop closest`, interleaved runs), and the incremental search's
-//! groups of four cost what groups of eight did (within 3 %). Building with
+//! build targets AVX-512, four (`wide::f64x4`, one AVX register) otherwise. A tree leaf of up to
+//! eight facets ([`crate::search::LEAF_SIZE`]) is therefore measured as one group of eight lanes
+//! or as up to two groups of four ([`groups`]), and the incremental search takes its queries a
+//! group of lanes at a time. With four lanes, `wide` was measured 1.5–1.7× faster than the same
+//! code on `[f64; 4]` arrays, which the compiler left scalar. Without AVX-512 an `f64x8` is two
+//! AVX registers, and the region arithmetic's thirty-odd live vectors no longer fit in the sixteen
+//! registers: they spill to the stack. On an AMD EPYC (Zen 3, AVX2), leaves of eight measured in
+//! two groups of four answered coherent queries 12 % faster than in one `f64x8` (532 → 471 ns at
+//! 10⁵ facets, 559 → 492 ns at 10⁶, `search_loop closest`, interleaved runs), and the incremental
+//! search's groups of four cost what groups of eight did (within 3 %). Building with
 //! `RUSTFLAGS="-C target-cpu=native --cfg tricontact_eight_lanes"` makes the lanes eight wide on
 //! any machine: to test that width where it is not the default, and to repeat the comparison.
 
@@ -185,6 +185,14 @@ pub(crate) fn measure_leaf(rows: &[f64], count: usize, p: &Vec3) -> Measured {
         measured.code = V::new(code);
     }
     measured
+}
+
+/// The groups of at most [`LANES`] facets, `(first slot, count)`, that the leaf `(first, count)`
+/// is stored and measured as (one with AVX-512, up to two otherwise): each has its own block of
+/// rows (see `Bvh::rows`).
+#[inline(always)]
+pub(crate) fn groups(first: usize, count: usize) -> impl Iterator<Item = (usize, usize)> {
+    (0..count.div_ceil(LANES)).map(move |g| (first + g * LANES, (count - g * LANES).min(LANES)))
 }
 
 /// Rows per facet of a leaf's block (see `Bvh::rows`): nine coordinates, then the facet index.
@@ -541,6 +549,21 @@ pub(crate) fn clearly_valid(pairs: &Pairs, tolerance: f64) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_leafs_groups_cover_it_in_order_a_vector_at_a_time() {
+        for count in 1..=crate::search::LEAF_SIZE {
+            let g: Vec<(usize, usize)> = groups(40, count).collect();
+            assert_eq!(g.len(), count.div_ceil(LANES));
+            let mut next = 40;
+            for &(first, n) in &g {
+                assert_eq!(first, next);
+                assert!((1..=LANES).contains(&n));
+                next += n;
+            }
+            assert_eq!(next, 40 + count);
+        }
+    }
     use crate::search::bvh::index;
     use crate::search::scenes::uniform;
 

@@ -5,14 +5,17 @@
 //! range changes (a binary search), so the two halves are the two halves of a Z-order cell and
 //! their boxes barely overlap; a range of identical codes is split in the middle. Splitting stops
 //! at leaves of at most [`LEAF_SIZE`] facets. (Splitting at the middle index instead was measured
-//! 3–10× slower to query: a middle index often straddles a jump of the Z curve.) A leaf's facets
-//! are measured together, one per lane (`search::lanes`), so a leaf holds as many as a vector has
-//! lanes: eight (`wide::f64x8`) where the build targets AVX-512, 5.2–5.4 on average on the
-//! benchmark's tori, and four (`wide::f64x4`) otherwise, 2.9 on average. On an AVX-512 machine,
-//! leaves of up to four were 15 % slower to query on the 10⁵-facet torus (medians of six
-//! interleaved runs; there an eight-lane measurement costs what a four-lane one does), and leaves
-//! of up to five, six and seven lay in between; on an AVX2 machine (AMD EPYC, Zen 3), where an
-//! `f64x8` is two registers, leaves of four were 10 % faster than leaves of eight. With four facets per leaf, splitting ranges of five to eight
+//! 3–10× slower to query: a middle index often straddles a jump of the Z curve.) A leaf holds up
+//! to eight facets, 5.2–5.4 on average on the benchmark's tori, measured together one per lane
+//! (`search::lanes`: in one group of eight lanes where the build targets AVX-512, in groups of
+//! four otherwise). On an AVX-512 machine, leaves of up to four were 15 % slower to query on the
+//! 10⁵-facet torus (medians of six interleaved runs; there an eight-lane measurement costs what a
+//! four-lane one does), and leaves of up to five, six and seven lay in between. On an AVX2 machine
+//! (AMD EPYC, Zen 3), measured in groups of four, leaves of up to four answered 1–2 % faster
+//! than leaves of eight (463 vs 471 ns at 10⁵ facets, 481 vs 492 at 10⁶) but were 15 % slower to
+//! build and 17 % slower to refit (`search_loop build` and `refit`, 254 vs 224 and 66 vs 57 ns
+//! per facet at 10⁶), and leaves of up to six were slower to query than either: eight everywhere.
+//! With four facets per leaf, splitting ranges of five to eight
 //! facets after their first four instead of at a Morton bit filled leaves to 3.1 and made coherent
 //! queries 1–2 % faster, within run-to-run noise: not kept. The top levels
 //! are split in parallel (`rayon::join`), each half into its own list, joined with shifted indices.
@@ -25,9 +28,11 @@
 
 use crate::search::node::{Child, EMPTY, Node, WIDTH, as_leaf, leaf};
 
-/// Most facets per leaf: the lanes of one measurement (`search::lanes`: eight where the build
-/// targets AVX-512, four otherwise; a leaf's count has four bits).
-pub const LEAF_SIZE: usize = crate::search::lanes::LANES;
+/// Most facets per leaf: one group of eight lanes, or two of four (`search::lanes`; a leaf's count
+/// has four bits).
+pub const LEAF_SIZE: usize = 8;
+
+const _: () = assert!(LEAF_SIZE <= 2 * crate::search::lanes::LANES);
 
 /// Below this many facets a range is split sequentially.
 const PARALLEL_GRAIN: usize = 1 << 16;
