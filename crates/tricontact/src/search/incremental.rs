@@ -56,9 +56,9 @@
 //! together so that their fetches from memory overlap, and prefetched as soon as a query is found
 //! to walk (the walks run at the chunk's end: on the 10⁶-facet torus the prefetch took a call from
 //! 53.1 to 49.5 ns per query, best of eight interleaved runs, and 53.6 to 51.6 in six more). The
-//! facets put aside are then measured a vector of lanes at a time, and a better one replaces the answer. A
-//! query whose first listed facet is missing (empty list, or excluded by the query) goes through
-//! the same tests one facet at a time; a query at NaN or infinity has no answer, as in the tree.
+//! facets put aside are then measured a vector of lanes at a time, and a better one replaces
+//! the answer. A query whose first listed facet is missing (empty list, or excluded by the
+//! query) goes through the same tests one facet at a time; a query at NaN or infinity has no answer, as in the tree.
 //!
 //! A query whose answer is not certified falls back to the tree, which
 //! [`Neighbourhoods::closest_all`] updates first, once, only if some query needs it: the certified

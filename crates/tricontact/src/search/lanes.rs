@@ -1,5 +1,5 @@
-//! The kernel's Voronoi-region computation lane by lane: the up to [`LANES`] facets of a tree
-//! leaf against one point, or [`LANES`] (point, facet) pairs at once (the incremental search).
+//! The kernel's Voronoi-region computation lane by lane: the up to [`LANES`] facets of a group
+//! of a tree leaf ([`groups`]) against one point, or [`LANES`] (point, facet) pairs at once (the incremental search).
 //!
 //! The arithmetic is exactly that of [`distance_squared_to_triangle`], operation for operation:
 //! the six dot products `d1 … d6` of the edges `ab`, `ac` with `p − a`, `p − b`, `p − c`, the
@@ -157,8 +157,8 @@ pub(crate) struct Measured {
 /// The feature number of a lane measured by the scalar kernel (see [`Measured`]).
 pub(crate) const RECOMPUTE: u8 = 7;
 
-/// Measures `p` against the leaf of `count` facets whose rows start at `rows[0]` (see
-/// `Bvh::rows`). Lanes at and beyond `count` hold whatever follows and are to be ignored.
+/// Measures `p` against the group (see [`groups`]) of `count` facets whose rows start at
+/// `rows[0]` (see `Bvh::rows`). Lanes at and beyond `count` hold whatever follows and are to be ignored.
 #[inline(always)]
 pub(crate) fn measure_leaf(rows: &[f64], count: usize, p: &Vec3) -> Measured {
     let corner = |v: usize| -> [V; 3] { std::array::from_fn(|d| row(rows, count, 3 * v + d)) };
@@ -201,7 +201,7 @@ pub(crate) const ROWS: usize = 10;
 /// The row of a leaf's block holding the facet indices (as `f64`, exact).
 const FACET_ROW: usize = 9;
 
-/// Writes facet `k` of a leaf of `count` facets into the leaf's block of rows: coordinate
+/// Writes facet `k` of a group of `count` facets into the group's block of rows: coordinate
 /// `r = 3v + d` of corner `v` at `r count + k`, the facet index at `9 count + k`.
 #[inline]
 pub(crate) fn write_leaf(
@@ -217,7 +217,7 @@ pub(crate) fn write_leaf(
     block[FACET_ROW * count + k] = f64::from(facet);
 }
 
-/// The corners of facet `k` of the leaf of `count` facets whose rows start at `rows[0]` (the
+/// The corners of facet `k` of the group of `count` facets whose rows start at `rows[0]` (the
 /// inverse of [`write_leaf`]).
 #[inline]
 pub(crate) fn leaf_corners(rows: &[f64], count: usize, k: usize) -> [Vec3; 3] {
@@ -238,8 +238,8 @@ fn feature_codes(masks: &[V; 6]) -> V {
     code
 }
 
-/// Row `r` of a leaf of `count` facets whose rows start at `rows[0]`: [`LANES`] lanes, the
-/// first `count` of them the leaf's.
+/// Row `r` of a group of `count` facets whose rows start at `rows[0]`: [`LANES`] lanes, the
+/// first `count` of them the group's.
 #[inline(always)]
 pub(crate) fn row(rows: &[f64], count: usize, r: usize) -> V {
     let at = r * count;
