@@ -6,8 +6,8 @@
 //! top of the stack advancing only for children within the bound. A subtree is pruned when the
 //! squared distance to its box exceeds the best squared distance so far (with a relative margin of
 //! 1e-12, so that exact ties are never pruned). The facets of a leaf are measured together
-//! (`lanes`: the branch-free [`distance_squared_to_triangle`], bit for bit, up to
-//! [`LEAF_SIZE`](crate::search::LEAF_SIZE) facets at a time) on the tree's rows (each leaf's corners coordinate by coordinate); only the
+//! (`lanes`: the branch-free [`distance_squared_to_triangle`], bit for bit, a group of a leaf's
+//! facets at a time) on the tree's rows (each group's corners coordinate by coordinate); only the
 //! winner is measured with the kernel's [`closest_point_on_triangle`], which says where its
 //! closest point lies (face, edge, vertex) and gives the reported distance. (Packets of coherent
 //! queries, `search::packet`, take the winner's closest point from the same lane arithmetic.)

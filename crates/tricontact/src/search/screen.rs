@@ -5,10 +5,10 @@
 //! facets are excluded (the formulas and their margins: [`crate::search::incremental`]).
 //!
 //! [`Bounds`] is the scalar form, one query at a time (the walks beyond a query's record, and the
-//! queries answered one facet at a time). For the lanes' queries at once, their values are put into
-//! lane `k` of a [`Stage`] (plain stores), and the same tests, operation for operation, run on
-//! the lanes' vectors (`lanes::V`) without a branch per test; the results are bit masks over the lanes. Any NaN
-//! makes a test fail, so it excludes nothing.
+//! queries answered one facet at a time). For the lanes' queries at once, their values are put
+//! into lane `k` of a [`Stage`] (plain stores), and the same tests, operation for operation, run
+//! on the lanes' vectors (`lanes::V`) without a branch per test; the results are bit masks over
+//! the lanes. Any NaN makes a test fail, so it excludes nothing.
 
 use crate::linalg::Vec3;
 use crate::search::direction::DIRECTION_ERROR;
