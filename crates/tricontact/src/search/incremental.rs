@@ -47,9 +47,9 @@
 //! motions go into a buffer the calling thread keeps from call to call: at 10⁶ facets a new one
 //! (12 MB) was mapped and zeroed by the system at every call, and the motions and `δ` took two
 //! passes (4.5 ms of a 52 ms call on one core; now 2.7 ms).
-//! Queries go in chunks of 256 (in parallel); within a chunk, one lane each (eight at a time
-//! with AVX-512, four otherwise: `search::lanes`), their first
-//! listed facets are measured together (`search::lanes`) and written as the answers, and
+//! Queries go in chunks of 256 (in parallel); within a chunk, a group at a time (one per lane:
+//! eight with AVX-512, four otherwise), their first listed facets are measured together
+//! (`search::lanes`) and written as the answers, and
 //! each query is screened: every facet the bounds cannot exclude is put aside (all exclusions are
 //! against the first facet's distance; measuring others can only lower it). The queries whose
 //! lists must be walked beyond the record then walk them, their first further entries read all
@@ -58,7 +58,8 @@
 //! 53.1 to 49.5 ns per query, best of eight interleaved runs, and 53.6 to 51.6 in six more). The
 //! facets put aside are then measured a vector of lanes at a time, and a better one replaces
 //! the answer. A query whose first listed facet is missing (empty list, or excluded by the
-//! query) goes through the same tests one facet at a time; a query at NaN or infinity has no answer, as in the tree.
+//! query) goes through the same tests one facet at a time; a query at NaN or infinity has no
+//! answer, as in the tree.
 //!
 //! A query whose answer is not certified falls back to the tree, which
 //! [`Neighbourhoods::closest_all`] updates first, once, only if some query needs it: the certified
@@ -739,8 +740,8 @@ impl Neighbourhoods {
         aside.len() - before
     }
 
-    /// Measures the (query, facet) pairs put aside, [`PAIRS`] at a time, each against its query's best
-    /// in the tree's order; a better facet is written into the query's answer (and is to be checked
+    /// Measures the (query, facet) pairs put aside, [`PAIRS`] at a time, each against its query's
+    /// best in the tree's order; a better facet is written into the query's answer (and is to be checked
     /// for degeneracy: `clear` off).
     fn measure_aside(
         &self,

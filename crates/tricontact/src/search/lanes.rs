@@ -1,5 +1,6 @@
 //! The kernel's Voronoi-region computation lane by lane: the up to [`LANES`] facets of a group
-//! of a tree leaf ([`groups`]) against one point, or [`LANES`] (point, facet) pairs at once (the incremental search).
+//! of a tree leaf ([`groups`]) against one point, or [`LANES`] (point, facet) pairs at once (the
+//! incremental search).
 //!
 //! The arithmetic is exactly that of [`distance_squared_to_triangle`], operation for operation:
 //! the six dot products `d1 … d6` of the edges `ab`, `ac` with `p − a`, `p − b`, `p − c`, the
@@ -44,11 +45,11 @@ use crate::closest::{
 };
 use crate::linalg::Vec3;
 
-/// One quantity of every lane: the facets of a leaf, or the pairs of [`closest_pairs`].
+/// One quantity of every lane: the facets of a group, or the pairs of [`closest_pairs`].
 pub(crate) type V = Vector;
 
-/// Lanes of one measurement: facets of one leaf evaluated together (eight with AVX-512, four
-/// otherwise; see the module documentation).
+/// Lanes of one measurement: the facets of one group evaluated together (eight with AVX-512,
+/// four otherwise; see the module documentation).
 pub(crate) const LANES: usize = std::mem::size_of::<V>() / std::mem::size_of::<f64>();
 
 /// (point, facet) pairs evaluated together by [`closest_pairs`]: one lane each.
@@ -158,7 +159,8 @@ pub(crate) struct Measured {
 pub(crate) const RECOMPUTE: u8 = 7;
 
 /// Measures `p` against the group (see [`groups`]) of `count` facets whose rows start at
-/// `rows[0]` (see `Bvh::rows`). Lanes at and beyond `count` hold whatever follows and are to be ignored.
+/// `rows[0]` (see `Bvh::rows`). Lanes at and beyond `count` hold whatever follows and are to be
+/// ignored.
 #[inline(always)]
 pub(crate) fn measure_leaf(rows: &[f64], count: usize, p: &Vec3) -> Measured {
     let corner = |v: usize| -> [V; 3] { std::array::from_fn(|d| row(rows, count, 3 * v + d)) };
@@ -187,12 +189,26 @@ pub(crate) fn measure_leaf(rows: &[f64], count: usize, p: &Vec3) -> Measured {
     measured
 }
 
+/// The leaf `(first, count)` cut into its head of at most [`LANES`] facets and the rest, each
+/// `(first slot, count)` (the rest empty with AVX-512): the groups of [`groups`], for the hot path
+/// that measures them without an iterator.
+#[inline(always)]
+pub(crate) fn halves(first: usize, count: usize) -> [(usize, usize); 2] {
+    let head = count.min(LANES);
+    [(first, head), (first + head, count - head)]
+}
+
+const _: () = assert!(
+    crate::search::LEAF_SIZE <= 2 * LANES,
+    "a leaf is at most two groups"
+);
+
 /// The groups of at most [`LANES`] facets, `(first slot, count)`, that the leaf `(first, count)`
 /// is stored and measured as (one with AVX-512, up to two otherwise): each has its own block of
 /// rows (see `Bvh::rows`).
 #[inline(always)]
 pub(crate) fn groups(first: usize, count: usize) -> impl Iterator<Item = (usize, usize)> {
-    (0..count.div_ceil(LANES)).map(move |g| (first + g * LANES, (count - g * LANES).min(LANES)))
+    halves(first, count).into_iter().filter(|&(_, n)| n > 0)
 }
 
 /// Rows per facet of a leaf's block (see `Bvh::rows`): nine coordinates, then the facet index.
@@ -435,8 +451,8 @@ pub(crate) fn load(v: &[[f64; PAIRS]; 3]) -> [V; 3] {
     [V::new(v[0]), V::new(v[1]), V::new(v[2])]
 }
 
-/// [`PAIRS`] (point, facet) pairs, coordinate by coordinate: `corners[v][d][k]` is coordinate `d` of
-/// corner `v` of pair `k`'s facet, `points[d][k]` coordinate `d` of its point.
+/// [`PAIRS`] (point, facet) pairs, coordinate by coordinate: `corners[v][d][k]` is coordinate `d`
+/// of corner `v` of pair `k`'s facet, `points[d][k]` coordinate `d` of its point.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct Pairs {
     pub(crate) corners: [[[f64; PAIRS]; 3]; 3],

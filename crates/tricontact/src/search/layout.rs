@@ -32,8 +32,6 @@ use crate::search::node::{Child, EMPTY, Node, WIDTH, as_leaf, leaf};
 /// has four bits).
 pub const LEAF_SIZE: usize = 8;
 
-const _: () = assert!(LEAF_SIZE <= 2 * crate::search::lanes::LANES);
-
 /// Below this many facets a range is split sequentially.
 const PARALLEL_GRAIN: usize = 1 << 16;
 
