@@ -2,7 +2,8 @@
 //!
 //! `search_bench` measures everything in about 90 s; comparing two builds of one path needs many
 //! short interleaved runs instead (this machine's speed drifts by tens of per cent over minutes).
-//! This program times one path on one core and prints the best time per query over `reps` calls:
+//! This program times one path on one core (or on `threads`, the optional fourth argument, except
+//! `walk`, which is sequential) and prints the best time per query over `reps` calls:
 //!
 //! ```text
 //! cargo run --release -p tricontact --example search_loop -- closest 316 15
@@ -39,19 +40,21 @@ use tricontact::search::scenes::{self, torus};
 use tricontact::search::{Bvh, Neighbourhoods, Query, Surface};
 use tricontact::{Vec3, distance_squared_to_triangle};
 
-const USAGE: &str = "usage: search_loop closest|incremental|walk|build|refit [nu ≥ 8, default 316] [reps ≥ 1, default 15]";
+const USAGE: &str = "usage: search_loop closest|incremental|walk|build|refit [nu ≥ 8, default 316] [reps ≥ 1, default 15] [threads ≥ 1, default 1]";
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mode = args.first().map_or("closest", String::as_str);
     let nu = args.get(1).map_or(Ok(316), |s| s.parse::<u32>());
     let reps = args.get(2).map_or(Ok(15), |s| s.parse::<usize>());
-    let (Ok(nu), Ok(reps)) = (nu, reps) else {
+    let threads = args.get(3).map_or(Ok(1), |s| s.parse::<usize>());
+    let (Ok(nu), Ok(reps), Ok(threads)) = (nu, reps, threads) else {
         eprintln!("{USAGE}");
         return ExitCode::FAILURE;
     };
     if nu < 8
         || reps == 0
+        || threads == 0
         || !matches!(mode, "closest" | "incremental" | "walk" | "build" | "refit")
     {
         eprintln!("{USAGE}");
@@ -66,9 +69,14 @@ fn main() -> ExitCode {
         .map(Query::point)
         .collect();
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
+        .num_threads(threads)
         .build()
-        .expect("a one-thread pool");
+        .expect("a thread pool");
+    let cores = if threads == 1 {
+        "one core".to_string()
+    } else {
+        format!("{threads} threads")
+    };
     if mode == "walk" {
         walk(&pool, &surface, &bvh, &nodes, &queries, (h, reps));
         return ExitCode::SUCCESS;
@@ -91,7 +99,7 @@ fn main() -> ExitCode {
             }
         });
         println!(
-            "{mode}, {} facets: {:.1} ns per facet (best of {reps} calls, one core)",
+            "{mode}, {} facets: {:.1} ns per facet (best of {reps} calls, {cores})",
             facets.len(),
             best * 1e9 / facets.len() as f64
         );
@@ -124,7 +132,7 @@ fn main() -> ExitCode {
         }
     });
     println!(
-        "{mode}, {} facets: {:.1} ns per query (best of {reps} calls, one core)",
+        "{mode}, {} facets: {:.1} ns per query (best of {reps} calls, {cores})",
         facets.len(),
         best * 1e9 / queries.len() as f64
     );

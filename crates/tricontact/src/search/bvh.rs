@@ -106,13 +106,19 @@ impl Bvh {
             .filter(|(_, d)| !**d)
             .map(|(c, _)| Aabb::EMPTY.union_point(c))
             .reduce(|| Aabb::EMPTY, |a, b| a.union(&b));
+        // Every facet keyed, in place (a filtered parallel collect gathers pieces and copies
+        // them); degenerate facets keyed past every Morton code (63 bits), sorted last and cut.
         let mut keys: Vec<(u64, u32)> = centers
             .par_iter()
+            .zip(degenerate.par_iter())
             .enumerate()
-            .filter(|(f, _)| !degenerate[*f])
-            .map(|(f, c)| (morton_code(c, &bounds), index(f)))
+            .map(|(f, (c, &d))| {
+                let code = if d { u64::MAX } else { morton_code(c, &bounds) };
+                (code, index(f))
+            })
             .collect();
         keys.par_sort_unstable();
+        keys.truncate(keys.partition_point(|&(code, _)| code != u64::MAX));
         let (root, nodes) = layout(&keys);
         let leaves = leaves_in_order(&nodes, root);
         let stack_size = 3 * depth(&nodes, root) + 1;
@@ -150,7 +156,14 @@ impl Bvh {
             order,
             ..
         } = self;
-        rows.resize(ROWS * order.len() + LANES, 0.0);
+        let len = ROWS * order.len() + LANES;
+        if rows.is_empty() {
+            // Zeroed by the allocator (pages the system zeroes as the fill below first writes
+            // them, on every thread) rather than written twice, once by one thread.
+            *rows = vec![0.0; len];
+        } else {
+            rows.resize(len, 0.0);
+        }
         // Each group's block of rows, cut off in slot order.
         let mut blocks = Vec::with_capacity(leaves.len());
         let mut rest = rows.as_mut_slice();
