@@ -115,21 +115,43 @@ fn degenerate_facets_are_skipped_and_reported() {
         Vec3::new(2.0, 2.0, 0.1),
         Vec3::new(3.0, 3.0, 0.1),
     ]);
-    let mut facets = facets;
-    facets.push([base, base + 1, base + 2]);
-    let degenerate = u32::try_from(facets.len() - 1).unwrap();
-    let surface = Surface::new(facets, nodes.len()).unwrap();
-    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
-    assert_eq!(bvh.degenerate_facets(), vec![degenerate]);
-    // A point right on the degenerate facet's line gets a regular facet.
-    let q = Query::point(Vec3::new(1.5, 1.5, 0.1));
-    let hit = bvh.closest(&surface, &q, f64::INFINITY).unwrap();
-    assert_ne!(hit.facet, degenerate);
-    same(
-        Some(hit),
-        brute_force_closest(&surface, &nodes, &q, f64::INFINITY),
-    )
-    .unwrap();
+    // The degenerate facet last, then first (the build sorts it out of the tree wherever it is).
+    for at_front in [false, true] {
+        let mut facets = facets.clone();
+        let degenerate = if at_front {
+            facets.insert(0, [base, base + 1, base + 2]);
+            0
+        } else {
+            facets.push([base, base + 1, base + 2]);
+            u32::try_from(facets.len() - 1).unwrap()
+        };
+        let surface = Surface::new(facets, nodes.len()).unwrap();
+        let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+        assert_eq!(bvh.degenerate_facets(), vec![degenerate]);
+        // A point right on the degenerate facet's line gets a regular facet.
+        let q = Query::point(Vec3::new(1.5, 1.5, 0.1));
+        let hit = bvh.closest(&surface, &q, f64::INFINITY).unwrap();
+        assert_ne!(hit.facet, degenerate);
+        same(
+            Some(hit),
+            brute_force_closest(&surface, &nodes, &q, f64::INFINITY),
+        )
+        .unwrap();
+        // Every regular facet is in the tree: a point just above its centroid finds it.
+        for f in (0..surface.len()).map(|f| u32::try_from(f).unwrap()) {
+            if f == degenerate {
+                continue;
+            }
+            let [a, b, c] = surface.corners(f, &nodes);
+            let q = Query::point((a + b + c) / 3.0 + Vec3::new(0.0, 0.0, 1e-3));
+            let hit = bvh.closest(&surface, &q, f64::INFINITY).unwrap();
+            same(
+                Some(hit),
+                brute_force_closest(&surface, &nodes, &q, f64::INFINITY),
+            )
+            .unwrap();
+        }
+    }
 }
 
 #[test]

@@ -741,8 +741,8 @@ impl Neighbourhoods {
     }
 
     /// Measures the (query, facet) pairs put aside, [`PAIRS`] at a time, each against its query's
-    /// best in the tree's order; a better facet is written into the query's answer (and is to be checked
-    /// for degeneracy: `clear` off).
+    /// best in the tree's order; a better facet is written into the query's answer (and is to be
+    /// checked for degeneracy: `clear` off).
     fn measure_aside(
         &self,
         queries: &[Query],

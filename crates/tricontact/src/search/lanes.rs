@@ -25,9 +25,9 @@
 //! two groups of four answered coherent queries 12 % faster than in one `f64x8` (532 → 471 ns at
 //! 10⁵ facets, 559 → 492 ns at 10⁶, `search_loop closest`, interleaved runs), and the incremental
 //! search's groups of four cost what groups of eight did (within 3 %). On an AMD EPYC Zen 4, whose
-//! AVX-512 runs on 256-bit units, the reverse holds: one `f64x8` answered coherent queries 28 %
-//! faster at 10⁵ and 11 % at 10⁶ than the same code built without AVX-512 (375 vs 520 ns,
-//! 472 vs 533 ns). Building with
+//! AVX-512 runs on 256-bit units, eight lanes in one `f64x8` are the faster: the same code built
+//! without AVX-512 (groups of four) took 39 % longer for coherent queries at 10⁵ and 13 % at 10⁶
+//! (520 vs 375 ns, 533 vs 472 ns). Building with
 //! `RUSTFLAGS="-C target-cpu=native --cfg tricontact_eight_lanes"` makes the lanes eight wide on
 //! any machine: to test that width where it is not the default, and to repeat the comparison.
 
@@ -568,6 +568,8 @@ pub(crate) fn clearly_valid(pairs: &Pairs, tolerance: f64) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::search::bvh::index;
+    use crate::search::scenes::uniform;
 
     #[test]
     fn a_leafs_groups_cover_it_in_order_a_vector_at_a_time() {
@@ -583,8 +585,6 @@ mod tests {
             assert_eq!(next, 40 + count);
         }
     }
-    use crate::search::bvh::index;
-    use crate::search::scenes::uniform;
 
     /// The rows of one leaf (see `Bvh::rows`) holding `corners` as facets `0, 1, …`, followed by
     /// `junk` (what lies past a leaf in the tree: other leaves' rows).

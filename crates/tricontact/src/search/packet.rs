@@ -15,8 +15,9 @@
 //!
 //! On the 10⁵-facet torus of the benchmark a packet gathers about 42 leaves (of up to eight
 //! facets, in an AVX-512 build) in 42 node visits, and a query lists 4.3 of them, the previous
-//! answer's among them, and measures them all. Tried and not kept (measured on that scene with leaves of up to four
-//! facets, when a packet gathered 69 leaves in 62 node visits and a query listed 5.7 and measured 5):
+//! answer's among them, and measures them all. Tried and not kept (measured on that scene with
+//! leaves of up to four facets, when a packet gathered 69 leaves in 62 node visits and a query
+//! listed 5.7 and measured 5):
 //! a cylinder ("puck") bound per leaf, centre, normal, radius and thickness, which would cut the
 //! measured leaves to 3.2 but made the query 6 % slower (its data and square root cost more than
 //! the leaves it saves); branch-free child selection in the gathering and prefetching the
