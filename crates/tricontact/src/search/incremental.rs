@@ -1059,8 +1059,9 @@ fn prefetch<T>(x: &T) {
     let _ = x;
 }
 
-/// Asks for the cache lines of `x` with the intent to write them (`prefetchw`), one request per 64
-/// bytes from its start (a line it ends in is asked for with what follows it).
+/// Asks for the cache lines of `x` with the intent to write them (`prefetchw`), one request every
+/// 64 bytes from its start: when `x` does not start on a line, the line holding its last bytes is
+/// left to the request for what follows it.
 #[inline(always)]
 fn prefetch_for_write<T>(x: &[T]) {
     #[cfg(target_arch = "x86_64")]

@@ -35,7 +35,8 @@
 //! 455 at 10⁶, AVX-512 `vcompresspd` per row). One gathering for two packets, narrowed to each
 //! packet's box before its queries: slower (384–400 vs 371–373 ns at 10⁵, 453–460 vs 428 at 10⁶).
 //! The answers' lines asked for with the intent to write two packets ahead (which the incremental
-//! search gains from): within noise (396 vs 404 and 388 vs 369 ns at 10⁶, 391 vs 391 at 10⁵).
+//! search gains from): within noise (with vs without, 396 vs 404 and 388 vs 369 ns at 10⁶, 391
+//! vs 391 at 10⁵).
 //!
 //! # Exactness
 //! A leaf left out is farther than `R` from `Q`, hence from every query of the packet. So when a
