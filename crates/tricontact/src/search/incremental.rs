@@ -194,6 +194,17 @@ const TABLE_COVER: usize = 8;
 /// The facet of an empty list.
 const NONE: u32 = u32::MAX;
 
+/// The largest offset into the further entries: offsets are `u32`.
+const MAX_OFFSET: usize = u32::MAX as usize;
+
+/// `at` as an offset into the further entries, `None` beyond `limit` (at most [`MAX_OFFSET`]).
+fn list_offset(at: usize, limit: usize) -> Option<u32> {
+    if at > limit {
+        return None;
+    }
+    u32::try_from(at).ok()
+}
+
 /// Per-query neighbourhood lists from a full search, for the incremental search.
 #[derive(Debug, Clone)]
 pub struct Neighbourhoods {
@@ -270,6 +281,19 @@ impl Neighbourhoods {
         queries: &[Query],
         skin: f64,
     ) -> Result<Self, SurfaceError> {
+        Self::within_offsets(bvh, surface, positions, queries, skin, MAX_OFFSET)
+    }
+
+    /// [`Neighbourhoods::new`] with list offsets of at most `limit` (at most [`MAX_OFFSET`]; a
+    /// test makes lists too long for a small limit).
+    fn within_offsets(
+        bvh: &Bvh,
+        surface: &Surface,
+        positions: &[Vec3],
+        queries: &[Query],
+        skin: f64,
+        limit: usize,
+    ) -> Result<Self, SurfaceError> {
         surface.check_positions(positions)?;
         // Each facet's robustness once (a facet is in about a dozen lists) when the queries cover
         // much of the surface; for a few queries on a large surface, per listed facet.
@@ -287,7 +311,9 @@ impl Neighbourhoods {
         // Chunks in parallel, each query hinted with the previous one's closest facet.
         let chunks: Vec<Result<ChunkLists, usize>> = queries
             .par_chunks(HINT_CHUNK)
-            .map(|chunk| Self::chunk_lists(bvh, surface, positions, &robustness_of, chunk, skin))
+            .map(|chunk| {
+                Self::chunk_lists(bvh, surface, positions, &robustness_of, chunk, skin, limit)
+            })
             .collect();
         let listed: usize = chunks
             .iter()
@@ -305,7 +331,8 @@ impl Neighbourhoods {
         for chunk in chunks {
             let offset = entries.len();
             for mut head in chunk.heads {
-                head.start = u32::try_from(offset + head.start as usize).map_err(|_| too_long())?;
+                head.start =
+                    list_offset(offset + head.start as usize, limit).ok_or_else(too_long)?;
                 heads.push(head);
             }
             entries.extend_from_slice(&chunk.entries);
@@ -322,7 +349,7 @@ impl Neighbourhoods {
             facet: NONE,
             near: [empty; NEAR],
             after: f32::INFINITY,
-            start: u32::try_from(entries.len()).map_err(|_| too_long())?,
+            start: list_offset(entries.len(), limit).ok_or_else(too_long)?,
         });
         Ok(Self {
             reference: positions[..surface.node_count()].to_vec(),
@@ -335,7 +362,7 @@ impl Neighbourhoods {
 
     /// The lists of one chunk of queries (see [`Neighbourhoods::new`]), made with one set of
     /// buffers, `robustness(f)` giving facet `f`'s robustness. `Err` with the number of listed
-    /// facets so far when the chunk's further entries cannot be counted in 32 bits.
+    /// facets so far when the chunk's further entries need an offset beyond `limit`.
     fn chunk_lists(
         bvh: &Bvh,
         surface: &Surface,
@@ -343,6 +370,7 @@ impl Neighbourhoods {
         robustness: &impl Fn(u32) -> f64,
         chunk: &[Query],
         skin: f64,
+        limit: usize,
     ) -> Result<ChunkLists, usize> {
         let mut out = ChunkLists {
             heads: Vec::with_capacity(chunk.len()),
@@ -359,7 +387,7 @@ impl Neighbourhoods {
                 out.robust = out.robust.min(robustness(f));
             }
             out.listed += list.len();
-            let start = u32::try_from(out.entries.len()).map_err(|_| out.listed)?;
+            let start = list_offset(out.entries.len(), limit).ok_or(out.listed)?;
             let head = record(surface, positions, q, reach, &list, start, &mut out.entries);
             out.heads.push(head);
         }
@@ -1112,6 +1140,39 @@ fn is_degenerate([a, b, c]: &[Vec3; 3]) -> bool {
 mod tests {
     use super::*;
     use crate::search::scenes::{near_surface, torus, uniform};
+
+    /// Lists whose offsets would exceed the limit (2³² − 1; here a small one, since the real one
+    /// takes 50 GB of entries) are refused with the count of listed facets, whether the limit is
+    /// passed within a chunk or only by the lists put together; lists that just fit are made.
+    #[test]
+    fn lists_beyond_the_offset_limit_are_refused() {
+        let (nodes, facets) = torus(40, 20, 2.0, 0.6);
+        let surface = Surface::new(facets.clone(), nodes.len()).unwrap();
+        let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+        let queries: Vec<Query> = near_surface(&nodes, &facets, 0.1, 2)
+            .into_iter()
+            .map(Query::point)
+            .collect();
+        assert!(queries.len() > HINT_CHUNK, "two chunks");
+        let make =
+            |limit| Neighbourhoods::within_offsets(&bvh, &surface, &nodes, &queries, 0.1, limit);
+        let full = make(MAX_OFFSET).unwrap();
+        let further = full.entries.len();
+        assert!(further > 1000, "{further} further entries");
+        let fits = make(further).unwrap();
+        assert_eq!((fits.len(), fits.entries.len()), (full.len(), further));
+        for limit in [further - 1, 10] {
+            match make(limit) {
+                Err(SurfaceError::ListsTooLong { entries }) => {
+                    assert!(
+                        entries > limit && entries <= full.len(),
+                        "{entries} for {limit}"
+                    );
+                }
+                other => panic!("limit {limit}: {:?}", other.map(|l| l.len())),
+            }
+        }
+    }
 
     /// The lists' robustness is the smallest of their facets', whether it comes from the table
     /// (queries covering the surface) or is computed per listed facet (a few queries); on a
