@@ -1144,18 +1144,24 @@ mod tests {
     use super::*;
     use crate::search::scenes::{near_surface, torus, uniform};
 
+    /// The surface of `facets` over `nodes`, its tree, and one query per facet within 0.1 of it.
+    fn scene(nodes: &[Vec3], facets: &[[u32; 3]]) -> (Surface, Bvh, Vec<Query>) {
+        let surface = Surface::new(facets.to_vec(), nodes.len()).unwrap();
+        let bvh = Bvh::build(&surface, nodes, 0.0).unwrap();
+        let queries = near_surface(nodes, facets, 0.1, 2)
+            .into_iter()
+            .map(Query::point)
+            .collect();
+        (surface, bvh, queries)
+    }
+
     /// Lists whose offsets would exceed the limit (2³² − 1; here a small one, since the real one
     /// takes 50 GB of entries) are refused with the count of listed facets, whether the limit is
     /// passed within a chunk or only by the lists put together; lists that just fit are made.
     #[test]
     fn lists_beyond_the_offset_limit_are_refused() {
         let (nodes, facets) = torus(40, 20, 2.0, 0.6);
-        let surface = Surface::new(facets.clone(), nodes.len()).unwrap();
-        let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
-        let queries: Vec<Query> = near_surface(&nodes, &facets, 0.1, 2)
-            .into_iter()
-            .map(Query::point)
-            .collect();
+        let (surface, bvh, queries) = scene(&nodes, &facets);
         assert!(queries.len() > HINT_CHUNK, "two chunks");
         let make =
             |limit| Neighbourhoods::within_offsets(&bvh, &surface, &nodes, &queries, 0.1, limit);
@@ -1187,12 +1193,7 @@ mod tests {
         for p in &mut nodes {
             *p += Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5) * 0.05;
         }
-        let surface = Surface::new(facets.clone(), nodes.len()).unwrap();
-        let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
-        let all: Vec<Query> = near_surface(&nodes, &facets, 0.1, 2)
-            .into_iter()
-            .map(Query::point)
-            .collect();
+        let (surface, bvh, all) = scene(&nodes, &facets);
         let few: Vec<Query> = all.iter().step_by(4 * TABLE_COVER).copied().collect();
         assert!(
             TABLE_COVER * few.len() < surface.len() && TABLE_COVER * all.len() >= surface.len()
