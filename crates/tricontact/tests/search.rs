@@ -137,7 +137,8 @@ fn degenerate_facets_are_skipped_and_reported() {
             brute_force_closest(&surface, &nodes, &q, f64::INFINITY),
         )
         .unwrap();
-        // Every regular facet is in the tree: a point just above its centroid finds it.
+        // Every regular facet is in the tree: a point just above its centroid gets the answer
+        // brute force gives (a facet left out would lose it to a neighbour).
         for f in (0..surface.len()).map(|f| u32::try_from(f).unwrap()) {
             if f == degenerate {
                 continue;
