@@ -45,21 +45,23 @@
 //! per facet, with a slack for rounding): of the 3.3 leaves (10⁵ facets) and 3.4 (10⁶) a query
 //! lists beside the previous answer's, 19 facets in all, 1.05 and 1.09 hold a facet within that
 //! bound (1.8 facets; the facets' own boxes keep 5.5). `search_loop closest`, best of interleaved
-//! rounds: the leaves without one skipped by a branch, slower (365–371 vs 353–357 ns at 10⁶); the
-//! listed leaves with one compacted and measured whole, 345 vs 358 ns at 10⁶ and 324 vs 339 at
-//! 10⁵ (after the test's bounds checks were hoisted, about 100 instructions per leaf; with them,
-//! no gain); the facets within the bound staged into one group of eight, 342 vs 356 ns at 10⁶,
-//! 318 vs 337 at 10⁵, 285 vs 306 at 10⁴ (staged by AVX-512 gathers instead of copies, slower:
-//! 388 vs 376 at 10⁶); on top of that, the previous answer's leaf left unmeasured when one of its
-//! facets' bounds holds the query's foot (its `|t|`, with the slack, then bounds the distance
-//! from above), slower (359 vs 340 ns): half the queries have no such facet in that leaf. The
-//! rows double the tree's memory (80 bytes more per facet) and, computed facet by facet, took the
-//! build from 185 to 313 ns per facet and the refit from 53 to 135 (one core): 4–6 % faster queries
-//! do not pay for that. Measuring each listed leaf twice costs 135 ns more per query (at 10⁵ and
-//! 10⁶, the second time from cache), yet leaving two of three unmeasured saved only 14–19 ns of
-//! that: the measurements overlap with the rest of the work. Starting each query from the leaf of
-//! the answer two queries back, so that consecutive queries need not wait for each other: slower
-//! (380 vs 356 ns at 10⁶, 358 vs 337 at 10⁵).
+//! rounds: the leaves without one skipped by a branch, slower (365–371 vs 357–358 ns at 10⁶); the
+//! listed leaves with one compacted and measured whole, 345 vs 358 ns at 10⁶ and 324 vs 339 at 10⁵
+//! (after the test's bounds checks were hoisted, about 100 instructions per leaf; with them,
+//! slower); the facets within the bound staged into one group of eight, 342 vs 356 ns at 10⁶, 318
+//! vs 337 at 10⁵ (before the hoisting, 285 vs 306 at 10⁴; staged by AVX-512 gathers instead of
+//! copies, slower: 388 vs 376 at 10⁶); on top of that, the previous answer's leaf left unmeasured
+//! when one of its facets' bounds holds the query's foot (its `|t|`, with the slack, then bounds
+//! the distance from above), slower (359 vs 340 ns): half the queries have no such facet in that
+//! leaf; the previous answer's facet measured by the scalar kernel instead, then the bound tested
+//! on every listed leaf, slower (405 vs 352 ns: the scalar kernel's branches). The bound doubles
+//! the tree's rows (80 bytes more per facet) and, computed facet by facet, took the build from 185
+//! to 313 ns per facet and the refit from 53 to 135 (one core): 4–6 % faster queries do not pay for
+//! that. Measuring each listed leaf twice costs 131–135 ns more per query (at 10⁵ and 10⁶, the
+//! second time from cache), yet leaving two of three unmeasured saved only 14–19 ns net of the
+//! bound's own cost: the measurements overlap with the rest of the work. Starting each query from
+//! the leaf of the answer two queries back, so that consecutive queries need not wait for each
+//! other: slower (380 vs 356 ns at 10⁶, 358 vs 337 at 10⁵).
 //!
 //! # Exactness
 //! A leaf left out is farther than `R` from `Q`, hence from every query of the packet. So when a
