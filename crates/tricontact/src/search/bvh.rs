@@ -5,8 +5,11 @@
 //!    in parallel.
 //! 2. Valid facets are sorted by the Morton code of their centroid (parallel sort; ties by facet
 //!    index, so the order is deterministic).
-//! 3. The topology follows from the sorted codes ([`crate::search::layout`]): binary splits at
-//!    Z-order cell boundaries, collapsed to four-wide nodes, stored depth-first.
+//! 3. The sorted facets are cut into leaves of at most eight consecutive ones, with boxes as small
+//!    as the cut allows (`search::leaves`: dynamic programming over the facets' boxes, in
+//!    parallel over Z-order cells). The topology above the leaves follows from their codes
+//!    ([`crate::search::layout`]): binary splits at Z-order cell boundaries, collapsed to
+//!    four-wide nodes, stored depth-first.
 //! 4. The corner positions of every facet are stored leaf by leaf, coordinate by coordinate (the
 //!    rows, in parallel over leaves), so a query reads each coordinate of a leaf's facets in one
 //!    vector load; the boxes (`search::node`) are filled bottom-up from the rows, leaf boxes
@@ -28,6 +31,7 @@ use crate::search::lanes::{LANES, ROWS, groups, leaf_corners, write_leaf};
 pub use crate::search::layout::LEAF_SIZE;
 pub(crate) use crate::search::layout::index;
 use crate::search::layout::{depth, layout};
+use crate::search::leaves::leaf_starts;
 use crate::search::morton::morton_code;
 use crate::search::node::{Child, Node, WIDTH, as_leaf};
 use crate::search::surface::{Surface, SurfaceError};
@@ -119,7 +123,10 @@ impl Bvh {
             .collect();
         keys.par_sort_unstable();
         keys.truncate(keys.partition_point(|&(code, _)| code != u64::MAX));
-        let (root, nodes) = layout(&keys);
+        let starts = leaf_starts(&keys, inflation, |f| {
+            Aabb::of_points(&surface.corners(f, positions))
+        });
+        let (root, nodes) = layout(&keys, &starts);
         let leaves = leaves_in_order(&nodes, root);
         let stack_size = 3 * depth(&nodes, root) + 1;
         let order: Vec<u32> = keys.into_par_iter().map(|(_, f)| f).collect();

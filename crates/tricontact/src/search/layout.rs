@@ -1,24 +1,34 @@
 //! Tree topology from Morton-sorted facets: binary splits, then collapsed to four-wide nodes.
 //!
 //! # Splits
-//! Each range of the sorted keys is split where the highest Morton bit that differs across the
-//! range changes (a binary search), so the two halves are the two halves of a Z-order cell and
-//! their boxes barely overlap; a range of identical codes is split in the middle. Splitting stops
-//! at leaves of at most [`LEAF_SIZE`] facets. (Splitting at the middle index instead was measured
-//! 3–10× slower to query: a middle index often straddles a jump of the Z curve.) A leaf holds up
-//! to eight facets, 5.2–5.4 on average on the benchmark's tori, measured together one per lane
-//! (`search::lanes`: in one group of eight lanes where the build targets AVX-512, in groups of
-//! four otherwise). On an AVX-512 machine, leaves of up to four were 15 % slower to query on the
-//! 10⁵-facet torus (medians of six interleaved runs; there an eight-lane measurement costs what a
-//! four-lane one does), and leaves of up to five, six and seven lay in between. On an AVX2 machine
-//! (AMD EPYC, Zen 3), measured in groups of four, leaves of up to four answered 1–2 % faster
-//! than leaves of eight (463 vs 471 ns at 10⁵ facets, 481 vs 492 at 10⁶) but were 15 % slower to
-//! build and 17 % slower to refit (`search_loop build` and `refit`, 254 vs 224 and 66 vs 57 ns
-//! per facet at 10⁶), and leaves of up to six were slower to query than either: eight everywhere.
-//! With four facets per leaf, splitting ranges of five to eight
-//! facets after their first four instead of at a Morton bit filled leaves to 3.1 and made coherent
-//! queries 1–2 % faster, within run-to-run noise: not kept. The top levels
-//! are split in parallel (`rayon::join`), each half into its own list, joined with shifted indices.
+//! The leaves are given: runs of at most [`LEAF_SIZE`] consecutive sorted facets
+//! (`search::leaves`). Each range of leaves is split where the highest Morton bit that differs
+//! across the first codes of its leaves changes (a binary search), so the two halves are, up to
+//! the leaves at the boundary, the two halves of a Z-order cell and their boxes barely overlap; a
+//! range of identical codes is split in the middle. (Splitting at the middle index instead was
+//! measured 3–10× slower to query: a middle index often straddles a jump of the Z curve.)
+//!
+//! Before the leaves were cut by `search::leaves`, the splits went on down to ranges of at most
+//! eight facets, which left 5.2–5.4 facets a leaf on the benchmark's tori (of the eight lanes a
+//! leaf is measured in). Cutting the leaves to least expanded box area fills them to 6.3 and made
+//! coherent queries 8–9 % faster on the 10⁶-facet torus (`search_loop closest 1000`, best of
+//! interleaved rounds: 330.6 vs 361.7 ns) and 3–4 % faster at 10⁵ and 10⁴ (321.4 vs 332.6, 296.4
+//! vs 308.5); the build on two threads went from 111.8 to 116.2 ns per facet, on one from 171 to
+//! 226, the refit from 55.3 to 51.6 (one core).
+//!
+//! Leaf size. A leaf holds up to eight facets, measured together one per lane (`search::lanes`: in
+//! one group of eight lanes where the build targets AVX-512, in groups of four otherwise). On an
+//! AVX-512 machine, with leaves cut by the splits, leaves of up to four were 15 % slower to query
+//! on the 10⁵-facet torus (medians of six interleaved runs; there an eight-lane measurement costs
+//! what a four-lane one does), and leaves of up to five, six and seven lay in between. On an AVX2
+//! machine (AMD EPYC, Zen 3), measured in groups of four, leaves of up to four answered 1–2 %
+//! faster than leaves of eight (463 vs 471 ns at 10⁵ facets, 481 vs 492 at 10⁶) but were 15 %
+//! slower to build and 17 % slower to refit (`search_loop build` and `refit`, 254 vs 224 and 66 vs
+//! 57 ns per facet at 10⁶), and leaves of up to six were slower to query than either: eight
+//! everywhere. With four facets per leaf, splitting ranges of five to eight facets after their
+//! first four instead of at a Morton bit filled leaves to 3.1 and made coherent queries 1–2 %
+//! faster, within run-to-run noise. The top levels are split in parallel (`rayon::join`), each
+//! half into its own list, joined with shifted indices.
 //!
 //! # Collapse
 //! Every internal node of the binary tree takes its children's children: up to four children per
@@ -32,31 +42,54 @@ use crate::search::node::{Child, EMPTY, Node, WIDTH, as_leaf, leaf};
 /// has four bits).
 pub const LEAF_SIZE: usize = 8;
 
-/// Below this many facets a range is split sequentially.
-const PARALLEL_GRAIN: usize = 1 << 16;
+/// Below this many leaves a range is split sequentially.
+const PARALLEL_GRAIN: usize = 1 << 13;
 
 /// A binary node: its two children.
 type Binary = [Child; 2];
 
-/// The four-wide tree over sorted `keys`: the root reference and the internal nodes.
-pub(crate) fn layout(keys: &[(u64, u32)]) -> (Child, Vec<Node>) {
-    let (root, binary) = split_range(keys, 0, keys.len());
+/// The four-wide tree over sorted `keys` cut into leaves at `starts` (the first key of each leaf,
+/// then `keys.len()`; see `search::leaves`): the root reference and the internal nodes.
+pub(crate) fn layout(keys: &[(u64, u32)], starts: &[u32]) -> (Child, Vec<Node>) {
+    let Some(leaves) = starts.len().checked_sub(1).filter(|&n| n > 0) else {
+        return (leaf(0, 0), Vec::new());
+    };
+    let tree = Leaves { keys, starts };
+    let (root, binary) = split_range(&tree, 0, leaves);
     let mut nodes = Vec::with_capacity(binary.len() / 2 + 1);
     let root = collapse(&binary, root, &mut nodes);
     (root, nodes)
 }
 
-/// The binary subtree over `keys[lo..hi]`: its reference and its nodes, depth-first, with node
-/// indices relative to the first of them.
-fn split_range(keys: &[(u64, u32)], lo: usize, hi: usize) -> (Child, Vec<Binary>) {
+/// The leaves the tree is built over: leaf `r` holds `keys[starts[r]..starts[r + 1]]`.
+struct Leaves<'a> {
+    keys: &'a [(u64, u32)],
+    starts: &'a [u32],
+}
+
+impl Leaves<'_> {
+    /// The Morton code of leaf `r`'s first facet.
+    fn key(&self, r: usize) -> u64 {
+        self.keys[self.starts[r] as usize].0
+    }
+
+    /// Where the leaves `lo..hi` (at least two) split: by the first codes of the leaves.
+    fn split(&self, lo: usize, hi: usize) -> usize {
+        split_at_bit(|r| self.key(r), lo, hi)
+    }
+}
+
+/// The binary subtree over the leaves `lo..hi`: its reference and its nodes, depth-first, with
+/// node indices relative to the first of them.
+fn split_range(tree: &Leaves, lo: usize, hi: usize) -> (Child, Vec<Binary>) {
     if hi - lo <= PARALLEL_GRAIN {
-        let mut nodes = Vec::with_capacity(2 * (hi - lo) / LEAF_SIZE + 1);
-        let root = push_range(&mut nodes, keys, lo, hi);
+        let mut nodes = Vec::with_capacity(2 * (hi - lo));
+        let root = push_range(&mut nodes, tree, lo, hi);
         return (root, nodes);
     }
-    let mid = split(keys, lo, hi);
+    let mid = tree.split(lo, hi);
     let ((lc, left), (rc, right)) =
-        rayon::join(|| split_range(keys, lo, mid), || split_range(keys, mid, hi));
+        rayon::join(|| split_range(tree, lo, mid), || split_range(tree, mid, hi));
     let offset = index(1 + left.len());
     // Internal references are relative to their half's first node.
     let shift = |by: u32| move |c: Child| if as_leaf(c).is_some() { c } else { c + by };
@@ -67,29 +100,39 @@ fn split_range(keys: &[(u64, u32)], lo: usize, hi: usize) -> (Child, Vec<Binary>
     (0, nodes)
 }
 
-/// Appends the binary subtree over `keys[lo..hi]` to `nodes`; returns its reference.
-fn push_range(nodes: &mut Vec<Binary>, keys: &[(u64, u32)], lo: usize, hi: usize) -> Child {
-    if hi - lo <= LEAF_SIZE {
-        return leaf(index(lo), index(hi - lo));
+/// Appends the binary subtree over the leaves `lo..hi` to `nodes`; returns its reference.
+fn push_range(nodes: &mut Vec<Binary>, tree: &Leaves, lo: usize, hi: usize) -> Child {
+    if hi - lo == 1 {
+        let (first, end) = (tree.starts[lo], tree.starts[lo + 1]);
+        return leaf(first, end - first);
     }
     let at = nodes.len();
     nodes.push([EMPTY; 2]);
-    let mid = split(keys, lo, hi);
-    let left = push_range(nodes, keys, lo, mid);
-    let right = push_range(nodes, keys, mid, hi);
+    let mid = tree.split(lo, hi);
+    let left = push_range(nodes, tree, lo, mid);
+    let right = push_range(nodes, tree, mid, hi);
     nodes[at] = [left, right];
     index(at)
 }
 
-/// Where `keys[lo..hi]` (sorted, at least two) splits: the first key whose highest differing bit
-/// is set, or the middle for identical codes.
-fn split(keys: &[(u64, u32)], lo: usize, hi: usize) -> usize {
-    let (first, last) = (keys[lo].0, keys[hi - 1].0);
+/// Where the range `lo..hi` (at least two, sorted by `key`) splits: the first index whose key has
+/// the highest differing bit of the range set, or the middle for identical keys.
+pub(crate) fn split_at_bit(key: impl Fn(usize) -> u64, lo: usize, hi: usize) -> usize {
+    let (first, last) = (key(lo), key(hi - 1));
     if first == last {
         return lo + (hi - lo) / 2;
     }
     let bit = 1u64 << (63 - (first ^ last).leading_zeros());
-    lo + keys[lo..hi].partition_point(|k| k.0 & bit == 0)
+    let (mut a, mut b) = (lo, hi);
+    while a < b {
+        let m = a + (b - a) / 2;
+        if key(m) & bit == 0 {
+            a = m + 1;
+        } else {
+            b = m;
+        }
+    }
+    a
 }
 
 /// Appends the four-wide version of the binary subtree `child` to `out`, depth-first; returns its
@@ -159,6 +202,7 @@ mod tests {
             .zip(0..)
             .map(|(&k, i)| (k, i))
             .collect();
+        let split = |keys: &[(u64, u32)], lo, hi| split_at_bit(|i| keys[i].0, lo, hi);
         assert_eq!(split(&keys, 0, 5), 2);
         assert_eq!(split(&keys, 2, 5), 3);
         let same = vec![(7u64, 0u32), (7, 1), (7, 2), (7, 3)];
@@ -172,7 +216,13 @@ mod tests {
             .map(|i| (u64::from(i).pow(2) % 99_991, i))
             .collect();
         keys.sort_unstable();
-        let (root, nodes) = layout(&keys);
+        // Leaves of seven, and a last shorter one.
+        let starts: Vec<u32> = (0..keys.len())
+            .step_by(7)
+            .chain([keys.len()])
+            .map(index)
+            .collect();
+        let (root, nodes) = layout(&keys, &starts);
         let mut seen = vec![0u8; keys.len()];
         let mut reached = vec![0u8; nodes.len()];
         let mut stack = vec![root];

@@ -3,7 +3,8 @@
 //! * [`surface`]: facets as node triples, with facet adjacency;
 //! * [`aabb`], [`morton`]: boxes and Z-order codes;
 //! * [`bvh`]: the bounding-volume hierarchy (parallel build, refit, rebuild on degraded quality);
-//! * [`layout`]: its topology (Morton splits collapsed to four-wide nodes); `node`: its nodes;
+//! * [`layout`]: its topology (Morton splits collapsed to four-wide nodes); `leaves`: the facets
+//!   cut into leaves of small boxes; `node`: its nodes;
 //! * [`query`]: closest facet and facets within a distance, parallel over nodes, deterministic,
 //!   optionally from a hint facet; `lanes`: a leaf's facets measured at once, one per lane;
 //! * [`packet`]: coherent batches, a packet of consecutive queries sharing one traversal;
@@ -20,6 +21,7 @@ pub(crate) mod direction;
 pub mod incremental;
 pub(crate) mod lanes;
 pub mod layout;
+pub(crate) mod leaves;
 pub mod morton;
 pub(crate) mod node;
 pub mod packet;
