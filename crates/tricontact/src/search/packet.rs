@@ -65,6 +65,12 @@
 //! before it is answered (with the radius from the packet before that), its leaves' rows
 //! prefetched as they are gathered, so that they arrive a packet ahead: within noise, with or
 //! without the prefetches (360.2 and 360.8 vs 358.2 ns at 10⁶, best of eight interleaved rounds).
+//! With the leaves cut by `search::leaves` (best of four interleaved rounds at 10⁶ unless said):
+//! packets of 24 or 32, slower (343.9 and 354.3 vs 332.7 ns); each group's rows padded to a stride
+//! of eight, so that every row load is one aligned cache line (tried with each group placed at
+//! eight rows per slot, which spreads them over more memory): 292.3 vs 299.1 ns at 10⁴, where it all
+//! sits in cache, but 372.1 vs 334.7 at 10⁶, so the split loads cost little; the rows on 2 MB pages
+//! (`madvise`): within noise (rounds of 339.9–365.1 vs 335.6–392.6 ns).
 //!
 //! # Exactness
 //! A leaf left out is farther than `R` from `Q`, hence from every query of the packet. So when a
