@@ -3,12 +3,13 @@
 //! # Build
 //! 1. Each facet's centroid and validity (non-degenerate, see [`crate::Facet::new`]) are computed
 //!    in parallel.
-//! 2. Valid facets are sorted by the Morton code of their centroid (parallel sort; ties by facet
+//! 2. Valid facets are sorted by the Hilbert code of their centroid (`search::hilbert`; parallel
+//!    sort; ties by facet
 //!    index, so the order is deterministic).
 //! 3. The sorted facets are cut into leaves of at most eight consecutive ones, with boxes as small
 //!    as the cut allows (`search::leaves`: dynamic programming over the facets' boxes, in
-//!    parallel over Z-order cells). The topology above the leaves follows from their codes
-//!    ([`crate::search::layout`]): binary splits at Z-order cell boundaries, collapsed to
+//!    parallel over grid cells). The topology above the leaves follows from their codes
+//!    ([`crate::search::layout`]): binary splits at grid cell boundaries, collapsed to
 //!    four-wide nodes, stored depth-first.
 //! 4. The corner positions of every facet are stored leaf by leaf, coordinate by coordinate (the
 //!    rows, in parallel over leaves), so a query reads each coordinate of a leaf's facets in one
@@ -27,12 +28,12 @@ use rayon::prelude::*;
 use crate::facet::Facet;
 use crate::linalg::Vec3;
 use crate::search::aabb::Aabb;
+use crate::search::hilbert::hilbert_code;
 use crate::search::lanes::{LANES, ROWS, groups, leaf_corners, write_leaf};
 pub use crate::search::layout::LEAF_SIZE;
 pub(crate) use crate::search::layout::index;
 use crate::search::layout::{depth, layout};
 use crate::search::leaves::leaf_starts;
-use crate::search::morton::morton_code;
 use crate::search::node::{Child, Node, WIDTH, as_leaf};
 use crate::search::surface::{Surface, SurfaceError};
 
@@ -111,13 +112,17 @@ impl Bvh {
             .map(|(c, _)| Aabb::EMPTY.union_point(c))
             .reduce(|| Aabb::EMPTY, |a, b| a.union(&b));
         // Every facet keyed, in place (a filtered parallel collect gathers pieces and copies
-        // them); degenerate facets keyed past every Morton code (63 bits), sorted last and cut.
+        // them); degenerate facets keyed past every Hilbert code (63 bits), sorted last and cut.
         let mut keys: Vec<(u64, u32)> = centers
             .par_iter()
             .zip(degenerate.par_iter())
             .enumerate()
             .map(|(f, (c, &d))| {
-                let code = if d { u64::MAX } else { morton_code(c, &bounds) };
+                let code = if d {
+                    u64::MAX
+                } else {
+                    hilbert_code(c, &bounds)
+                };
                 (code, index(f))
             })
             .collect();

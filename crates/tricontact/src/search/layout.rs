@@ -1,12 +1,15 @@
-//! Tree topology from Morton-sorted facets: binary splits, then collapsed to four-wide nodes.
+//! Tree topology from facets sorted along a Hilbert curve: binary splits, then collapsed to
+//! four-wide nodes.
 //!
 //! # Splits
 //! The leaves are given: runs of at most [`LEAF_SIZE`] consecutive sorted facets
-//! (`search::leaves`). Each range of leaves is split where the highest Morton bit that differs
+//! (`search::leaves`). Each range of leaves is split where the highest code bit that differs
 //! across the first codes of its leaves changes (a binary search), so the two halves are, up to
-//! the leaves at the boundary, the two halves of a Z-order cell and their boxes barely overlap; a
+//! the leaves at the boundary, two halves of a grid cell (`search::hilbert`: the top bits of a code
+//! name its cell) and their boxes barely overlap; a
 //! range of identical codes is split in the middle. (Splitting at the middle index instead was
-//! measured 3–10× slower to query: a middle index often straddles a jump of the Z curve.)
+//! measured 3–10× slower to query, when the facets were in Z-order: a middle index often
+//! straddled a jump of the Z curve.)
 //!
 //! Before the leaves were cut by `search::leaves`, the splits went on down to ranges of at most
 //! eight facets, which left 5.2–5.4 facets a leaf on the benchmark's tori (of the eight lanes a
@@ -68,7 +71,7 @@ struct Leaves<'a> {
 }
 
 impl Leaves<'_> {
-    /// The Morton code of leaf `r`'s first facet.
+    /// The code of leaf `r`'s first facet.
     fn key(&self, r: usize) -> u64 {
         self.keys[self.starts[r] as usize].0
     }

@@ -1,4 +1,4 @@
-//! Leaves: the Morton-sorted facets cut into runs of at most [`LEAF_SIZE`], each run's box as
+//! Leaves: the sorted facets (along a Hilbert curve, `search::hilbert`) cut into runs of at most [`LEAF_SIZE`], each run's box as
 //! small as the run allows.
 //!
 //! # Cost
@@ -15,20 +15,20 @@
 //! The `3m²` every run pays is the price of one more leaf; the rest prefers compact runs. Margins
 //! of 0.5, 1, 1.5, 2 and 3 mean diagonals, coherent queries on the 10⁶-facet torus
 //! (`search_loop closest 1000`, best of four interleaved rounds): 345.1, 333.5, 335.8, 341.0 and
-//! 342.9 ns, against 356.9 for the leaves cut by Morton splits alone.
+//! 342.9 ns, against 356.9 for the leaves cut by code-bit splits alone (facets in Z-order then).
 //!
 //! # Partition
 //! Among all cuts of a sequence of `n` facets into runs of 1 … [`LEAF_SIZE`] consecutive ones,
 //! the one of least total cost follows by dynamic programming: `C(0) = 0`,
 //! `C(j) = min_{1 ≤ k ≤ 8} C(j − k) + c(facets j − k … j − 1)`, the run's box grown facet by facet
 //! (eight box unions per facet; ties keep the shortest last run, so the cut is deterministic). A
-//! run never straddles a jump of the Z curve, whose box would be large, and leaves fill up: on
-//! the benchmark's 10⁶-facet torus, 6.3 facets per leaf against 5.2 when a range is split at its
-//! highest differing Morton bit down to eight facets or fewer (the rule the tree above the
-//! leaves still follows, `search::layout`).
+//! run does not join facets far apart along the curve's turns, whose box would be large, and leaves
+//! fill up: with the facets in Z-order, on the benchmark's 10⁶-facet torus, 6.3 facets per leaf
+//! against 5.2 when a range is split at its highest differing code bit down to eight facets or
+//! fewer (the rule the tree above the leaves still follows, `search::layout`).
 //!
-//! The sorted facets are first cut at Morton-bit splits into chunks of at most [`CHUNK`]; each
-//! chunk is partitioned on its own, in parallel. A chunk is a Z-order cell, so the cut between two
+//! The sorted facets are first cut at code-bit splits into chunks of at most [`CHUNK`]; each
+//! chunk is partitioned on its own, in parallel. A chunk is a grid cell, so the cut between two
 //! chunks is one the splits would have made anyway.
 
 use rayon::prelude::*;
@@ -73,7 +73,7 @@ pub(crate) fn leaf_starts(
     starts
 }
 
-/// Cuts `keys[lo..hi]` at Morton-bit splits into ranges of at most [`CHUNK`], in order.
+/// Cuts `keys[lo..hi]` at code-bit splits into ranges of at most [`CHUNK`], in order.
 fn cut_chunks(keys: &[(u64, u32)], lo: usize, hi: usize, out: &mut Vec<(usize, usize)>) {
     if hi - lo <= CHUNK {
         if hi > lo {
@@ -171,7 +171,7 @@ mod tests {
 
     #[test]
     fn the_partition_costs_no_more_than_any_other() {
-        // Against every cut into runs of eight, and of one, and of the Morton-like halving.
+        // Against every cut into runs of one fixed size, from one to eight.
         let boxes: Vec<Aabb> = (0..200)
             .map(|i| unit_box(f64::from(i) + if i % 50 < 25 { 0.0 } else { 7.5 }))
             .collect();
@@ -198,7 +198,7 @@ mod tests {
                 .windows(2)
                 .all(|w| w[0] < w[1] && (w[1] - w[0]) as usize <= LEAF_SIZE)
         );
-        // Chunks are whole Z-order cells: with keys 0 … 3·4096 − 1 the first cut is at 8192,
+        // Chunks are whole grid cells: with keys 0 … 3·4096 − 1 the first cut is at 8192,
         // the next at 4096.
         assert!(starts.contains(&4096) && starts.contains(&8192));
         assert!(leaf_starts(&[], 0.0, |f| unit_box(f64::from(f))) == vec![0]);

@@ -1,9 +1,9 @@
 //! Contact search: which facet of a master surface is closest to each slave node.
 //!
 //! * [`surface`]: facets as node triples, with facet adjacency;
-//! * [`aabb`], [`morton`]: boxes and Z-order codes;
+//! * [`aabb`], [`morton`], [`hilbert`]: boxes, Z-order codes and Hilbert codes;
 //! * [`bvh`]: the bounding-volume hierarchy (parallel build, refit, rebuild on degraded quality);
-//! * [`layout`]: its topology (Morton splits collapsed to four-wide nodes); `leaves`: the facets
+//! * [`layout`]: its topology (code-bit splits collapsed to four-wide nodes); `leaves`: the facets
 //!   cut into leaves of small boxes; `node`: its nodes;
 //! * [`query`]: closest facet and facets within a distance, parallel over nodes, deterministic,
 //!   optionally from a hint facet; `lanes`: a leaf's facets measured at once, one per lane;
@@ -18,6 +18,7 @@
 pub mod aabb;
 pub mod bvh;
 pub(crate) mod direction;
+pub mod hilbert;
 pub mod incremental;
 pub(crate) mod lanes;
 pub mod layout;

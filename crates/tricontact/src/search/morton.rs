@@ -1,7 +1,9 @@
 //! Morton (Z-order) codes: 21 bits per axis interleaved into 63 bits.
 //!
-//! Sorting facets by the code of their centroid puts facets that are close in space close in the
-//! sorted order; splitting that order in halves gives the tree its shape (a linear BVH).
+//! Sorting points by their code puts points that are close in space close in the sorted order:
+//! the search answers a batch of queries in no particular order in this order
+//! (`search::packet`). The tree sorts its facets along a Hilbert curve instead
+//! (`search::hilbert`), whose codes share the quantisation and the bit interleaving here.
 
 use crate::linalg::Vec3;
 use crate::search::aabb::Aabb;
@@ -9,7 +11,7 @@ use crate::search::aabb::Aabb;
 /// Spreads the low 21 bits of `v` so that bit `b` moves to bit `3b`.
 #[must_use]
 #[inline]
-fn spread(v: u64) -> u64 {
+pub(crate) fn spread(v: u64) -> u64 {
     let mut x = v & 0x1f_ffff;
     x = (x | (x << 32)) & 0x001f_0000_0000_ffff;
     x = (x | (x << 16)) & 0x001f_0000_ff00_00ff;
@@ -23,16 +25,24 @@ fn spread(v: u64) -> u64 {
 #[must_use]
 #[inline]
 pub fn morton_code(p: &Vec3, bounds: &Aabb) -> u64 {
+    let [x, y, z] = quantise(p, bounds).map(u64::from);
+    spread(x) | (spread(y) << 1) | (spread(z) << 2)
+}
+
+/// The cell of `p` on a 2²¹ grid over `bounds`, each coordinate in `0 … 2²¹ − 1` (points outside
+/// the box are clamped into it, a NaN coordinate goes to 0).
+#[must_use]
+#[inline]
+pub(crate) fn quantise(p: &Vec3, bounds: &Aabb) -> [u32; 3] {
     let extent = (bounds.max - bounds.min).sup(&Vec3::repeat(f64::MIN_POSITIVE));
     let scale = f64::from((1u32 << 21) - 1);
-    let q = |d: usize| {
+    std::array::from_fn(|d| {
         let t = ((p[d] - bounds.min[d]) / extent[d]).clamp(0.0, 1.0);
         // Truncation of a value in [0, 2^21) is the quantisation.
         #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
-        let cell = (t * scale) as u64;
+        let cell = (t * scale) as u32;
         cell
-    };
-    spread(q(0)) | (spread(q(1)) << 1) | (spread(q(2)) << 2)
+    })
 }
 
 #[cfg(test)]
