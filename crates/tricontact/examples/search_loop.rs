@@ -14,7 +14,8 @@
 //!
 //! The scene is `search_bench`'s: a torus of `nu × nu/2` quads split in two (316 gives 99 856
 //! facets, 1000 gives 10⁶), one query per facet within ±2 element sizes of the surface, in facet
-//! order. `closest` times [`Bvh::closest_all_into`]; `incremental` makes neighbourhood lists
+//! order. `closest` times [`Bvh::closest_all_into`], `random` the same on the queries shuffled
+//! (`search_bench`'s random order); `incremental` makes neighbourhood lists
 //! (skin half an element), deforms the torus by 0.01 element sizes as `search_bench` does and
 //! times [`Neighbourhoods::closest_all_into`]. `walk` times, on the same motion, the alternative
 //! the incremental search does not take: from each query's facet before the motion, a walk to
@@ -40,7 +41,7 @@ use tricontact::search::scenes::{self, torus};
 use tricontact::search::{Bvh, Neighbourhoods, Query, Surface};
 use tricontact::{Vec3, distance_squared_to_triangle};
 
-const USAGE: &str = "usage: search_loop closest|incremental|walk|build|refit [nu ≥ 8, default 316] [reps ≥ 1, default 15] [threads ≥ 1, default 1]";
+const USAGE: &str = "usage: search_loop closest|random|incremental|walk|build|refit [nu ≥ 8, default 316] [reps ≥ 1, default 15] [threads ≥ 1, default 1]";
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -55,7 +56,10 @@ fn main() -> ExitCode {
     if nu < 8
         || reps == 0
         || threads == 0
-        || !matches!(mode, "closest" | "incremental" | "walk" | "build" | "refit")
+        || !matches!(
+            mode,
+            "closest" | "random" | "incremental" | "walk" | "build" | "refit"
+        )
     {
         eprintln!("{USAGE}");
         return ExitCode::FAILURE;
@@ -64,10 +68,13 @@ fn main() -> ExitCode {
     let h = std::f64::consts::TAU / f64::from(nu / 2);
     let surface = Surface::new(facets.clone(), nodes.len()).expect("a valid torus");
     let bvh = Bvh::build(&surface, &nodes, 0.0).expect("positions for every node");
-    let queries: Vec<Query> = scenes::near_surface(&nodes, &facets, 2.0 * h, 11)
+    let mut queries: Vec<Query> = scenes::near_surface(&nodes, &facets, 2.0 * h, 11)
         .into_iter()
         .map(Query::point)
         .collect();
+    if mode == "random" {
+        scenes::shuffle(&mut queries, 5);
+    }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -107,7 +114,7 @@ fn main() -> ExitCode {
     }
     let mut out = vec![None; queries.len()];
     let best = pool.install(|| {
-        if mode == "closest" {
+        if mode == "closest" || mode == "random" {
             best_of(reps, || {
                 bvh.closest_all_into(&surface, &queries, f64::INFINITY, &mut out)
                     .expect("one answer per query");
