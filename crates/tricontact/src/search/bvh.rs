@@ -28,7 +28,7 @@ use rayon::prelude::*;
 use crate::facet::Facet;
 use crate::linalg::Vec3;
 use crate::search::aabb::Aabb;
-use crate::search::hilbert::hilbert_code;
+use crate::search::hilbert::hilbert_codes;
 use crate::search::lanes::{LANES, ROWS, groups, leaf_corners, write_leaf};
 pub use crate::search::layout::LEAF_SIZE;
 pub(crate) use crate::search::layout::index;
@@ -113,19 +113,19 @@ impl Bvh {
             .reduce(|| Aabb::EMPTY, |a, b| a.union(&b));
         // Every facet keyed, in place (a filtered parallel collect gathers pieces and copies
         // them); degenerate facets keyed past every Hilbert code (63 bits), sorted last and cut.
-        let mut keys: Vec<(u64, u32)> = centers
-            .par_iter()
-            .zip(degenerate.par_iter())
+        // Eight codes at a time (`hilbert_codes` works in lanes).
+        let mut keys: Vec<(u64, u32)> = vec![(0, 0); centers.len()];
+        keys.par_chunks_mut(8)
+            .zip(centers.par_chunks(8).zip(degenerate.par_chunks(8)))
             .enumerate()
-            .map(|(f, (c, &d))| {
-                let code = if d {
-                    u64::MAX
-                } else {
-                    hilbert_code(c, &bounds)
-                };
-                (code, index(f))
-            })
-            .collect();
+            .for_each(|(at, (out, (cs, ds)))| {
+                let codes =
+                    hilbert_codes(std::array::from_fn(|k| cs[k.min(cs.len() - 1)]), &bounds);
+                for (k, key) in out.iter_mut().enumerate() {
+                    let code = if ds[k] { u64::MAX } else { codes[k] };
+                    *key = (code, index(8 * at + k));
+                }
+            });
         keys.par_sort_unstable();
         keys.truncate(keys.partition_point(|&(code, _)| code != u64::MAX));
         let starts = leaf_starts(&keys, inflation, |f| {

@@ -6,7 +6,8 @@
 //! the "transposed" index (at each level, an axis whose bit is set inverts the lower bits of the
 //! first axis, and one whose bit is clear exchanges its lower bits with the first axis's; then a
 //! Gray decoding), whose bits, interleaved with the first axis most significant, are the index.
-//! Here the branches of that loop are replaced by masks. Only the top 12 levels of the 21 follow
+//! Here the branches of that loop are replaced by masks, and eight points are encoded at once,
+//! one per lane of a `wide::u32x8`. Only the top 12 levels of the 21 follow
 //! the Hilbert curve; within each cell of level 12 (a 2⁻¹² part of the box per axis, far below a
 //! facet of any mesh the tree is worth building for) the nine finer levels follow the Z curve: on
 //! all 21 levels the transform took half the build's time (figures below).
@@ -20,8 +21,12 @@
 //! queries were 5 % faster than in Z-order (`search_loop closest 1000`, best of two sets of four
 //! interleaved rounds, 319.9 and 322.7 vs 337.8 and 339.7 ns) and 3.5 % at 10⁵ (310.6 vs 321.6);
 //! with the top 12 levels, as built now, 4 % (328.6 vs 340.8 ns at 10⁶, 315.8 vs 329.7 at 10⁵,
-//! 284.1 vs 297.5 at 10⁴, best of three or four interleaved rounds), for a build on two threads of
-//! 139.7 instead of 122.3 ns per facet at 10⁶ (197.1 with 21 levels).
+//! 284.1 vs 297.5 at 10⁴, best of three or four interleaved rounds). The build on two threads at
+//! 10⁶ (`search_loop build 1000 5 2`, best of three interleaved rounds): 130.5 ns per facet, against
+//! 118.4 in Z-order and 140.2 with the transform one point at a time (197.1 with all 21 levels,
+//! one point at a time, in an earlier round).
+
+use wide::u32x8;
 
 use crate::linalg::Vec3;
 use crate::search::aabb::Aabb;
@@ -40,41 +45,54 @@ const LEVELS: u32 = 12;
 #[must_use]
 #[inline]
 pub fn hilbert_code(p: &Vec3, bounds: &Aabb) -> u64 {
-    let cell = quantise(p, bounds);
-    let fine = BITS - LEVELS;
-    let [x, y, z] = cell.map(|v| spread(u64::from(v & ((1 << fine) - 1))));
-    (hilbert_index(cell.map(|v| v >> fine)) << (3 * fine)) | x | (y << 1) | (z << 2)
+    hilbert_codes(std::array::from_fn::<Vec3, 8, _>(|_| *p), bounds)[0]
 }
 
-/// The Hilbert index of the cell `x` of a grid of 2^[`LEVELS`] cells per axis.
+/// [`hilbert_code`] of eight points at once (the transform in lanes of `u32x8`).
+#[must_use]
 #[inline]
-fn hilbert_index(mut x: [u32; 3]) -> u64 {
+pub fn hilbert_codes(points: [Vec3; 8], bounds: &Aabb) -> [u64; 8] {
+    let cells = points.map(|p| quantise(&p, bounds));
+    let fine = BITS - LEVELS;
+    let axis = |d: usize| u32x8::new(std::array::from_fn(|k| cells[k][d] >> fine));
+    let index = hilbert_index([axis(0), axis(1), axis(2)]).map(u32x8::to_array);
+    std::array::from_fn(|k| {
+        let [x, y, z] = cells[k].map(|v| spread(u64::from(v & ((1 << fine) - 1))));
+        let [a, b, c] = [0, 1, 2].map(|d| spread(u64::from(index[d][k])));
+        (((a << 2) | (b << 1) | c) << (3 * fine)) | x | (y << 1) | (z << 2)
+    })
+}
+
+/// The transposed Hilbert index of eight cells of a grid of 2^[`LEVELS`] cells per axis, lane by
+/// lane: interleaved, first axis most significant, they are the index.
+#[inline]
+fn hilbert_index(mut x: [u32x8; 3]) -> [u32x8; 3] {
+    let zero = u32x8::ZERO;
     // Inverse undo, from the top level down.
     let mut q = 1u32 << (LEVELS - 1);
     while q > 1 {
-        let p = q - 1;
+        let (p, bit) = (u32x8::splat(q - 1), u32x8::splat(q));
         // Where bit `q` of axis `i` is set (`set` all ones), the lower bits of the first axis
         // are inverted; otherwise they are exchanged with axis `i`'s (nothing for the first axis).
-        x[0] ^= p & 0u32.wrapping_sub(u32::from(x[0] & q != 0));
+        let clear = |v: u32x8| (v & bit).simd_eq(zero);
+        x[0] ^= p & !clear(x[0]);
         for i in 1..3 {
-            let set = 0u32.wrapping_sub(u32::from(x[i] & q != 0));
-            let t = (x[0] ^ x[i]) & p & !set;
-            x[0] ^= (p & set) | t;
+            let keep = clear(x[i]);
+            let t = (x[0] ^ x[i]) & p & keep;
+            x[0] ^= (p & !keep) | t;
             x[i] ^= t;
         }
         q >>= 1;
     }
-    // Gray encode.
+    // Gray encode: `t` is the XOR of `q − 1` over the bits `q > 1` set in the last axis, so its
+    // bit `j` is the parity of that axis's bits above `j` (a suffix XOR, by shifts).
     x[1] ^= x[0];
     x[2] ^= x[1];
-    let mut t = 0u32;
-    let mut q = 1u32 << (LEVELS - 1);
-    while q > 1 {
-        t ^= (q - 1) & 0u32.wrapping_sub(u32::from(x[2] & q != 0));
-        q >>= 1;
+    let mut t = x[2] >> 1;
+    for shift in [1, 2, 4, 8, 16] {
+        t ^= t >> shift;
     }
-    let [a, b, c] = x.map(|v| spread(u64::from(v ^ t)));
-    (a << 2) | (b << 1) | c
+    x.map(|v| v ^ t)
 }
 
 #[cfg(test)]
@@ -89,7 +107,9 @@ mod tests {
         let mut cells: Vec<([u32; 3], u64)> = (0..n * n * n)
             .map(|i| {
                 let c = [i % n, (i / n) % n, i / (n * n)];
-                (c, hilbert_index(c.map(|v| v * step)))
+                let lanes = hilbert_index(c.map(|v| u32x8::splat(v * step)))
+                    .map(|v| spread(u64::from(v.to_array()[0])));
+                (c, (lanes[0] << 2) | (lanes[1] << 1) | lanes[2])
             })
             .collect();
         cells.sort_by_key(|&(_, code)| code);
