@@ -1,5 +1,5 @@
-//! Leaves: the sorted facets (along a Hilbert curve, `search::hilbert`) cut into runs of at most [`LEAF_SIZE`], each run's box as
-//! small as the run allows.
+//! Leaves: the sorted facets (along a Hilbert curve, `search::hilbert`) cut into runs of at most
+//! [`LEAF_SIZE`], each run's box as small as the run allows.
 //!
 //! # Cost
 //! A query measures every leaf whose box is within its bound of it, and a leaf costs the same to
@@ -37,7 +37,7 @@ use crate::search::aabb::Aabb;
 use crate::search::layout::{LEAF_SIZE, index, split_at_bit};
 
 /// The margin `m`, in mean facet-box diagonals (see the module documentation).
-pub const MARGIN: f64 = 1.0;
+pub(crate) const MARGIN: f64 = 1.0;
 
 /// Most facets a chunk partitioned on its own holds.
 const CHUNK: usize = 4096;
@@ -86,12 +86,14 @@ fn cut_chunks(keys: &[(u64, u32)], lo: usize, hi: usize, out: &mut Vec<(usize, u
     cut_chunks(keys, mid, hi, out);
 }
 
-/// The margin `m` for a chunk whose facet boxes are `boxes`.
+/// The margin `m` for a chunk whose facet boxes are `boxes` (without the inflation if that is
+/// not finite: every leaf box is then unbounded, and the facet size alone chooses the cut).
 fn margin(boxes: &[Aabb], inflation: f64) -> f64 {
     let sum: f64 = boxes.iter().map(|b| (b.max - b.min).norm()).sum();
     #[allow(clippy::cast_precision_loss)]
-    let mean = sum / boxes.len() as f64;
-    MARGIN * mean + 2.0 * inflation
+    let mean = MARGIN * sum / boxes.len() as f64;
+    let m = mean + 2.0 * inflation;
+    if m.is_finite() { m } else { mean }
 }
 
 /// The first index of each run of least total cost over `boxes` (in order, from 0; without the
@@ -184,6 +186,14 @@ mod tests {
                 "size {size}"
             );
         }
+    }
+
+    #[test]
+    fn an_unbounded_inflation_leaves_the_facet_size_to_choose() {
+        let boxes: Vec<Aabb> = (0..64).map(|i| unit_box(f64::from(i))).collect();
+        let m = margin(&boxes, f64::INFINITY);
+        assert!(m.is_finite() && m > 0.0);
+        assert_eq!(runs(&boxes, m), runs(&boxes, margin(&boxes, 0.0)));
     }
 
     #[test]
