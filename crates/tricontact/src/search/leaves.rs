@@ -17,8 +17,9 @@
 //! (`search_loop closest 1000`, best of four interleaved rounds): 345.1, 333.5, 335.8, 341.0 and
 //! 342.9 ns, against 356.9 for the leaves cut by code-bit splits alone (facets in Z-order then).
 //! With the facets in Hilbert order, margins of 0.7, 1 and 1.5 were within noise of one another
-//! (376.8, 357.8 and 350.7 ns in six rounds on a slow spell), and so was the expanded box's volume
-//! as the cost instead of its half-area.
+//! (376.8, 357.8 and 350.7 ns in six rounds on a slow spell); in Z-order, the expanded box's
+//! volume as the cost instead of its half-area was too (347.4 ns at a margin of two diagonals vs
+//! 344.5, four rounds).
 //!
 //! # Partition
 //! Among all cuts of a sequence of `n` facets into runs of 1 … [`LEAF_SIZE`] consecutive ones,
