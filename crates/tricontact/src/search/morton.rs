@@ -1,9 +1,9 @@
 //! Morton (Z-order) codes: 21 bits per axis interleaved into 63 bits.
 //!
-//! Sorting points by their code puts points that are close in space close in the sorted order:
-//! the search answers a batch of queries in no particular order in this order
-//! (`search::packet`). The tree sorts its facets along a Hilbert curve instead
-//! (`search::hilbert`), whose codes share the quantisation and the bit interleaving here.
+//! Sorting points by their code puts points that are close in space close in the sorted order.
+//! The search itself sorts along a Hilbert curve (`search::hilbert`: the tree's facets, and the
+//! batches of queries in no particular order), whose codes share the quantisation and the bit
+//! interleaving here; the Z curve jumps where the Hilbert curve does not.
 
 use crate::linalg::Vec3;
 use crate::search::aabb::Aabb;

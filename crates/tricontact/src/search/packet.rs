@@ -455,8 +455,8 @@ impl Bvh {
         }
     }
 
-    /// `false` for a batch worth answering in Hilbert order: large, and with a median distance between
-    /// consecutive queries (on evenly spaced samples) above [`ORDER_SPREAD`] leaf sizes.
+    /// `false` for a batch worth answering in Hilbert order: large, and with a median distance
+    /// between consecutive queries (on evenly spaced samples) above [`ORDER_SPREAD`] leaf sizes.
     pub(crate) fn coherent(&self, queries: &[Query]) -> bool {
         let n = queries.len();
         if n < REORDER_MIN || self.leaf_size.is_nan() || self.leaf_size <= 0.0 {
