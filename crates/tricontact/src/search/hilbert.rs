@@ -73,8 +73,9 @@ fn hilbert_index(mut x: [u32x8; 3]) -> [u32x8; 3] {
     let mut q = 1u32 << (LEVELS - 1);
     while q > 1 {
         let (p, bit) = (u32x8::splat(q - 1), u32x8::splat(q));
-        // Where bit `q` of axis `i` is set (`set` all ones), the lower bits of the first axis
-        // are inverted; otherwise they are exchanged with axis `i`'s (nothing for the first axis).
+        // Where bit `q` of axis `i` is set, the lower bits of the first axis are inverted; where
+        // it is clear (`keep` all ones), they are exchanged with axis `i`'s (nothing for the
+        // first axis itself).
         let clear = |v: u32x8| (v & bit).simd_eq(zero);
         x[0] ^= p & !clear(x[0]);
         for i in 1..3 {
@@ -140,6 +141,24 @@ mod tests {
             let top = 3 * LEVELS - 3;
             assert!(run.iter().all(|(_, code)| code >> top == run[0].1 >> top));
         }
+    }
+
+    #[test]
+    fn eight_at_once_equal_one_at_a_time() {
+        let b = Aabb {
+            min: Vec3::new(-1.0, 0.0, 2.0),
+            max: Vec3::new(3.0, 0.5, 9.0),
+        };
+        let points: [Vec3; 8] = std::array::from_fn(|k| {
+            #[allow(clippy::cast_precision_loss)]
+            let s = k as f64;
+            Vec3::new(-1.0 + 0.53 * s, 0.07 * s, 2.0 + 0.9 * s)
+        });
+        let codes = hilbert_codes(points, &b);
+        for (p, code) in points.iter().zip(codes) {
+            assert_eq!(code, hilbert_code(p, &b));
+        }
+        assert!(codes.windows(2).all(|w| w[0] != w[1]));
     }
 
     #[test]
