@@ -119,8 +119,7 @@ impl Bvh {
             .zip(centers.par_chunks(8).zip(degenerate.par_chunks(8)))
             .enumerate()
             .for_each(|(at, (out, (cs, ds)))| {
-                let codes =
-                    hilbert_codes(std::array::from_fn(|k| cs[k.min(cs.len() - 1)]), &bounds);
+                let codes = hilbert_codes(cs, &bounds);
                 for (k, key) in out.iter_mut().enumerate() {
                     let code = if ds[k] { u64::MAX } else { codes[k] };
                     *key = (code, index(8 * at + k));

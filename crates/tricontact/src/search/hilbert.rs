@@ -46,14 +46,20 @@ const LEVELS: u32 = 12;
 #[must_use]
 #[inline]
 pub fn hilbert_code(p: &Vec3, bounds: &Aabb) -> u64 {
-    hilbert_codes(std::array::from_fn::<Vec3, 8, _>(|_| *p), bounds)[0]
+    hilbert_codes(std::slice::from_ref(p), bounds)[0]
 }
 
-/// [`hilbert_code`] of eight points at once (the transform in lanes of `u32x8`).
+/// [`hilbert_code`] of up to eight points at once (the transform in lanes of `u32x8`): entry `k`
+/// is the code of `points[k]`; the entries past `points.len()` repeat the last point's.
+///
+/// # Panics
+/// If `points` is empty or holds more than eight points.
 #[must_use]
 #[inline]
-pub fn hilbert_codes(points: [Vec3; 8], bounds: &Aabb) -> [u64; 8] {
-    let cells = points.map(|p| quantise(&p, bounds));
+pub fn hilbert_codes(points: &[Vec3], bounds: &Aabb) -> [u64; 8] {
+    assert!((1..=8).contains(&points.len()), "one to eight points");
+    let cells: [[u32; 3]; 8] =
+        std::array::from_fn(|k| quantise(&points[k.min(points.len() - 1)], bounds));
     let fine = BITS - LEVELS;
     let axis = |d: usize| u32x8::new(std::array::from_fn(|k| cells[k][d] >> fine));
     let index = hilbert_index([axis(0), axis(1), axis(2)]).map(u32x8::to_array);
@@ -154,11 +160,14 @@ mod tests {
             let s = k as f64;
             Vec3::new(-1.0 + 0.53 * s, 0.07 * s, 2.0 + 0.9 * s)
         });
-        let codes = hilbert_codes(points, &b);
+        let codes = hilbert_codes(&points, &b);
         for (p, code) in points.iter().zip(codes) {
             assert_eq!(code, hilbert_code(p, &b));
         }
         assert!(codes.windows(2).all(|w| w[0] != w[1]));
+        // Fewer than eight: the rest repeat the last point's code.
+        let three: [u64; 8] = std::array::from_fn(|k| codes[k.min(2)]);
+        assert_eq!(hilbert_codes(&points[..3], &b), three);
     }
 
     #[test]

@@ -489,8 +489,11 @@ impl Bvh {
             .zip(queries.par_chunks(8))
             .enumerate()
             .for_each(|(at, (out, qs))| {
-                let points = std::array::from_fn(|k| qs[k.min(qs.len() - 1)].point);
-                let codes = hilbert_codes(points, &bounds);
+                let mut points = [Vec3::zeros(); 8];
+                for (p, q) in points.iter_mut().zip(qs) {
+                    *p = q.point;
+                }
+                let codes = hilbert_codes(&points[..qs.len()], &bounds);
                 for (k, key) in out.iter_mut().enumerate() {
                     *key = (codes[k], index(8 * at + k));
                 }
