@@ -78,6 +78,28 @@
 //! of those lines asked for ahead: slower (39.3 vs 37.9 ns at 10⁶, best of five interleaved
 //! rounds).
 //!
+//! Where the time goes, by removing parts (10⁶ facets, motion 0.01 element sizes, best of 30 calls
+//! in four or more interleaved rounds): with the screen's outcome replaced by "certified" and the
+//! screen itself left out, a call took 20.7 ns per query against 39.3–40.3 for the search, so the
+//! record, the corners, the lanes' measure, the answers and the node motions are half of it; the
+//! screen (two listed facets staged per query, and the bounds in the lanes) adds 8.5 ns (29.2 with
+//! its outcome computed and then ignored), the walks about 5 (34.6 with no query walking) and the
+//! facets put aside the rest: about 57 ns on average for each of the 17.8 % of queries that need
+//! more than their first facet (75 for a walk). Not writing the answers saved nothing measurable
+//! (38.1 vs 38.1 ns): their writes are hidden. Not kept, in the light of those figures: the listed
+//! facets' node motions staged as read and turned into translations and spreads in the lanes, one
+//! vector operation for all lanes instead of scalar arithmetic per lane: within noise (42.1 vs 42.0
+//! ns; thirteen stores per facet and lane instead of eight); the listed facets staged only where
+//! the Lipschitz bound, tested in the lanes once the first facets are measured, does not exclude
+//! them (it excludes 60 % of them): slower (42.4 vs 39.3 ns, and 43.2 vs 40.1 with their facets
+//! asked for early); the facets and node motions of a walk's first four further entries asked for
+//! before the walks: within noise (40.5 vs 40.3 ns); one listed facet in the record instead of two:
+//! slower (48.2 vs 41.4 ns; more walks); chunks of 128 or 512 queries instead of 256: within noise
+//! (40.6 and 39.9 vs 39.9 ns). What is left is spread over the per-lane work (no instruction stands
+//! out in a profile); a bound for the walks that needs no node motion per listed facet (for
+//! instance a deformation bound per region of the surface, computed once per call) is the change
+//! these figures point to.
+//!
 //! A query whose answer is not certified falls back to the tree, which
 //! [`Neighbourhoods::closest_all`] updates first, once, only if some query needs it: the certified
 //! queries never touch the tree.
