@@ -28,7 +28,7 @@ use rayon::prelude::*;
 use crate::facet::Facet;
 use crate::linalg::Vec3;
 use crate::search::aabb::Aabb;
-use crate::search::hilbert::hilbert_codes;
+use crate::search::hilbert::sorted_keys;
 use crate::search::lanes::{LANES, ROWS, groups, leaf_corners, write_leaf};
 pub use crate::search::layout::LEAF_SIZE;
 pub(crate) use crate::search::layout::index;
@@ -111,21 +111,10 @@ impl Bvh {
             .filter(|(_, d)| !**d)
             .map(|(c, _)| Aabb::EMPTY.union_point(c))
             .reduce(|| Aabb::EMPTY, |a, b| a.union(&b));
-        // Every facet keyed, in place (a filtered parallel collect gathers pieces and copies
-        // them); degenerate facets keyed past every Hilbert code (63 bits), sorted last and cut.
-        // Eight codes at a time (`hilbert_codes` works in lanes).
-        let mut keys: Vec<(u64, u32)> = vec![(0, 0); centers.len()];
-        keys.par_chunks_mut(8)
-            .zip(centers.par_chunks(8).zip(degenerate.par_chunks(8)))
-            .enumerate()
-            .for_each(|(at, (out, (cs, ds)))| {
-                let codes = hilbert_codes(cs, &bounds);
-                for (k, key) in out.iter_mut().enumerate() {
-                    let code = if ds[k] { u64::MAX } else { codes[k] };
-                    *key = (code, index(8 * at + k));
-                }
-            });
-        keys.par_sort_unstable();
+        // Degenerate facets keyed past every Hilbert code (63 bits), sorted last and cut.
+        let mut keys = sorted_keys(centers.len(), &bounds, |f| {
+            (!degenerate[f]).then_some(centers[f])
+        });
         keys.truncate(keys.partition_point(|&(code, _)| code != u64::MAX));
         let starts = leaf_starts(&keys, inflation, |f| {
             Aabb::of_points(&surface.corners(f, positions))

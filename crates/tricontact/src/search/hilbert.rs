@@ -26,14 +26,13 @@
 //! 118.4 in Z-order and 140.2 with the transform one point at a time (197.1 with all 21 levels,
 //! one point at a time, in an earlier round).
 
+use rayon::prelude::*;
 use wide::u32x8;
 
 use crate::linalg::Vec3;
 use crate::search::aabb::Aabb;
-use crate::search::morton::{quantise, spread};
-
-/// Bits per axis of the grid (that of [`crate::search::morton::morton_code`]).
-const BITS: u32 = 21;
+use crate::search::layout::index;
+use crate::search::morton::{BITS, interleave, quantise};
 
 /// Levels ordered along the Hilbert curve; the `BITS − LEVELS` finer ones follow the Z curve
 /// within each cell of level [`LEVELS`].
@@ -64,10 +63,43 @@ pub fn hilbert_codes(points: &[Vec3], bounds: &Aabb) -> [u64; 8] {
     let axis = |d: usize| u32x8::new(std::array::from_fn(|k| cells[k][d] >> fine));
     let index = hilbert_index([axis(0), axis(1), axis(2)]).map(u32x8::to_array);
     std::array::from_fn(|k| {
-        let [x, y, z] = cells[k].map(|v| spread(u64::from(v & ((1 << fine) - 1))));
-        let [a, b, c] = [0, 1, 2].map(|d| spread(u64::from(index[d][k])));
-        (((a << 2) | (b << 1) | c) << (3 * fine)) | x | (y << 1) | (z << 2)
+        let below = interleave(cells[k].map(|v| u64::from(v & ((1 << fine) - 1))));
+        (first_axis_high(index, k) << (3 * fine)) | below
     })
+}
+
+/// Lane `k` of a transposed index interleaved, its first axis most significant.
+#[inline]
+fn first_axis_high(index: [[u32; 8]; 3], k: usize) -> u64 {
+    interleave([2, 1, 0].map(|d| u64::from(index[d][k])))
+}
+
+/// The keys `(code, i)` of the items `0..n` sorted (by code, then index: deterministic), the code
+/// the [`hilbert_code`] of `point(i)`, computed eight at a time in parallel; an item without a
+/// point is keyed `u64::MAX`, past every code, so it sorts last.
+pub(crate) fn sorted_keys(
+    n: usize,
+    bounds: &Aabb,
+    point: impl Fn(usize) -> Option<Vec3> + Sync,
+) -> Vec<(u64, u32)> {
+    // Written in place: a parallel collect gathers pieces and copies them.
+    let mut keys: Vec<(u64, u32)> = vec![(0, 0); n];
+    keys.par_chunks_mut(8).enumerate().for_each(|(at, out)| {
+        let points: [Option<Vec3>; 8] =
+            std::array::from_fn(|k| (k < out.len()).then(|| point(8 * at + k)).flatten());
+        let placed = points.map(|p| p.unwrap_or(bounds.min));
+        let codes = hilbert_codes(&placed[..out.len()], bounds);
+        for (k, key) in out.iter_mut().enumerate() {
+            let code = if points[k].is_some() {
+                codes[k]
+            } else {
+                u64::MAX
+            };
+            *key = (code, index(8 * at + k));
+        }
+    });
+    keys.par_sort_unstable();
+    keys
 }
 
 /// The transposed Hilbert index of eight cells of a grid of 2^[`LEVELS`] cells per axis, lane by
@@ -115,9 +147,8 @@ mod tests {
         let mut cells: Vec<([u32; 3], u64)> = (0..n * n * n)
             .map(|i| {
                 let c = [i % n, (i / n) % n, i / (n * n)];
-                let lanes = hilbert_index(c.map(|v| u32x8::splat(v * step)))
-                    .map(|v| spread(u64::from(v.to_array()[0])));
-                (c, (lanes[0] << 2) | (lanes[1] << 1) | lanes[2])
+                let lanes = hilbert_index(c.map(|v| u32x8::splat(v * step))).map(u32x8::to_array);
+                (c, first_axis_high(lanes, 0))
             })
             .collect();
         cells.sort_by_key(|&(_, code)| code);
@@ -168,6 +199,38 @@ mod tests {
         // Fewer than eight: the rest repeat the last point's code.
         let three: [u64; 8] = std::array::from_fn(|k| codes[k.min(2)]);
         assert_eq!(hilbert_codes(&points[..3], &b), three);
+    }
+
+    #[test]
+    fn sorted_keys_are_the_codes_in_order_with_the_pointless_last() {
+        let b = Aabb {
+            min: Vec3::zeros(),
+            max: Vec3::repeat(1.0),
+        };
+        // Twenty items (two full chunks of eight and a part), every fifth without a point, and
+        // two items at one point (their order is that of their indices).
+        let point = |i: usize| {
+            #[allow(clippy::cast_precision_loss)]
+            let t = (i % 13) as f64 / 13.0;
+            (i % 5 != 4).then(|| Vec3::new(t, (3.0 * t) % 1.0, (7.0 * t) % 1.0))
+        };
+        let keys = sorted_keys(20, &b, point);
+        let mut expected: Vec<(u64, u32)> = (0..20)
+            .map(|i| {
+                (
+                    point(i).map_or(u64::MAX, |p| hilbert_code(&p, &b)),
+                    index(i),
+                )
+            })
+            .collect();
+        expected.sort_unstable();
+        assert_eq!(keys, expected);
+        assert!(
+            keys[16..]
+                .iter()
+                .all(|&(code, i)| code == u64::MAX && i % 5 == 4)
+        );
+        assert_eq!(point(0), point(13), "a tie, ordered by index");
     }
 
     #[test]

@@ -8,6 +8,9 @@
 use crate::linalg::Vec3;
 use crate::search::aabb::Aabb;
 
+/// Bits per axis of the grid the points are quantised on.
+pub(crate) const BITS: u32 = 21;
+
 /// Spreads the low 21 bits of `v` so that bit `b` moves to bit `3b`.
 #[must_use]
 #[inline]
@@ -25,7 +28,14 @@ pub(crate) fn spread(v: u64) -> u64 {
 #[must_use]
 #[inline]
 pub fn morton_code(p: &Vec3, bounds: &Aabb) -> u64 {
-    let [x, y, z] = quantise(p, bounds).map(u64::from);
+    interleave(quantise(p, bounds).map(u64::from))
+}
+
+/// The low 21 bits of `x`, `y`, `z` interleaved, bit `b` of `x` at bit `3b`, of `y` at `3b + 1`,
+/// of `z` at `3b + 2`.
+#[must_use]
+#[inline]
+pub(crate) fn interleave([x, y, z]: [u64; 3]) -> u64 {
     spread(x) | (spread(y) << 1) | (spread(z) << 2)
 }
 
@@ -35,7 +45,7 @@ pub fn morton_code(p: &Vec3, bounds: &Aabb) -> u64 {
 #[inline]
 pub(crate) fn quantise(p: &Vec3, bounds: &Aabb) -> [u32; 3] {
     let extent = (bounds.max - bounds.min).sup(&Vec3::repeat(f64::MIN_POSITIVE));
-    let scale = f64::from((1u32 << 21) - 1);
+    let scale = f64::from((1u32 << BITS) - 1);
     std::array::from_fn(|d| {
         let t = ((p[d] - bounds.min[d]) / extent[d]).clamp(0.0, 1.0);
         // Truncation of a value in [0, 2^21) is the quantisation.

@@ -110,7 +110,7 @@ use wide::f64x8;
 use crate::linalg::Vec3;
 use crate::search::aabb::Aabb;
 use crate::search::bvh::{Bvh, index};
-use crate::search::hilbert::hilbert_codes;
+use crate::search::hilbert::sorted_keys;
 use crate::search::lanes::LaneBest;
 use crate::search::node::{Child, as_leaf};
 use crate::search::query::{Candidate, HINT_CHUNK, Hit, Query, TIE_MARGIN};
@@ -484,21 +484,7 @@ impl Bvh {
         out: &mut [Option<Hit>],
     ) {
         let bounds = self.bounds().unwrap_or(Aabb::EMPTY);
-        let mut keys: Vec<(u64, u32)> = vec![(0, 0); queries.len()];
-        keys.par_chunks_mut(8)
-            .zip(queries.par_chunks(8))
-            .enumerate()
-            .for_each(|(at, (out, qs))| {
-                let mut points = [Vec3::zeros(); 8];
-                for (p, q) in points.iter_mut().zip(qs) {
-                    *p = q.point;
-                }
-                let codes = hilbert_codes(&points[..qs.len()], &bounds);
-                for (k, key) in out.iter_mut().enumerate() {
-                    *key = (codes[k], index(8 * at + k));
-                }
-            });
-        keys.par_sort_unstable();
+        let keys = sorted_keys(queries.len(), &bounds, |i| Some(queries[i].point));
         let sorted: Vec<Query> = keys.par_iter().map(|&(_, i)| queries[i as usize]).collect();
         let mut answers = vec![None; queries.len()];
         answers
