@@ -39,9 +39,9 @@ use crate::search::morton::{BITS, interleave, quantise};
 const LEVELS: u32 = 12;
 
 /// The Hilbert code of `p` quantised on a 2²¹ grid over `bounds` (the quantisation of
-/// [`crate::search::morton::morton_code`]): its top [`LEVELS`] levels along the Hilbert curve, the
+/// [`crate::search::morton::morton_code`]): its top `LEVELS` (12) levels along the Hilbert curve, the
 /// finer ones in Z-order within their cell. One lane of [`hilbert_codes`], which the tree and the
-/// reordering of batches call through [`sorted_keys`].
+/// reordering of batches call through `sorted_keys`.
 #[must_use]
 #[inline]
 pub fn hilbert_code(p: &Vec3, bounds: &Aabb) -> u64 {
