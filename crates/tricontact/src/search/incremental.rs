@@ -104,10 +104,11 @@
 //! Hilbert curve through their points then; per call and group, `T` the centre of the box of the
 //! motions of the nodes of the group's screened facets and the spread the largest `|m − T|₁` among
 //! them; the screen read these instead of each facet's motions. On the 10⁶-facet torus at 0.01
-//! element sizes the group spread was a tenth of `δ` and a query measured 1.27 facets, as many as
-//! with each facet's own bound, but the groups' pass gathered 1.64 nodes per query out of order
-//! and took 6.6–8.6 ms a call: 50.8–52.1 against 36.7–37.7 ns per query (best of 20 calls, three
-//! interleaved rounds). The screen with no motions at all (`T = 0`, the spread `δ`) measured more
+//! element sizes the group spread was a tenth of `δ` and a query measured 1.27 facets (1.15 with
+//! each facet's own bound, by `search_bench`), but the groups' pass gathered 1.64 nodes per query
+//! out of order and took 6.6–8.6 ms a call, and the rest of a call, each query looking up its
+//! group's motion, was no faster than before: 50.8–52.1 against 36.7–37.7 ns per query in all
+//! (best of 20 calls, three interleaved rounds). The screen with no motions at all (`T = 0`, the spread `δ`) measured more
 //! facets and took 50.8 against 36.8 ns. Also not kept: the node motions in `f32` (16 bytes per
 //! node instead of 24; the bound then needs a slack of a few `f32` roundings of `δ`): 39.1 vs 38.8
 //! ns; the answers written with non-temporal stores, timed by the mean of 20 calls rather than the
