@@ -1,7 +1,8 @@
 //! # One search path in a loop, for A/B comparisons
 //!
-//! `search_bench` measures everything in about a minute; comparing two builds of one path needs many
-//! short interleaved runs instead (this machine's speed drifts by tens of per cent over minutes).
+//! `search_bench` measures everything in about a minute; comparing two builds of one path needs
+//! many short interleaved runs instead (this machine's speed drifts by tens of per cent over
+//! minutes).
 //! This program times one path on one core (or on `threads`, the optional fourth argument, except
 //! `walk`, which is sequential) and prints the best time per query over `reps` calls, and the
 //! median. The bench's figures are means of batches of calls, nearer the median than the best.
@@ -96,14 +97,14 @@ fn main() -> ExitCode {
     if mode == "build" || mode == "refit" {
         let moved = scenes::deformed(&nodes, h, 0.01);
         let mut tree = bvh.clone();
-        let best = pool.install(|| {
+        let times = pool.install(|| {
             if mode == "build" {
-                best_of(reps, || {
+                timed(reps, || {
                     std::hint::black_box(Bvh::build(&surface, &nodes, 0.0).expect("a tree"));
                 })
             } else {
                 let mut k = 0;
-                best_of(reps, || {
+                timed(reps, || {
                     k += 1;
                     let at = if k % 2 == 0 { &nodes } else { &moved };
                     tree.update(&surface, at).expect("positions for every node");
@@ -113,15 +114,15 @@ fn main() -> ExitCode {
         println!(
             "{mode}, {} facets: {:.1} ns per facet (best of {reps} calls, {cores}; median {:.1})",
             facets.len(),
-            best.best * 1e9 / facets.len() as f64,
-            best.median * 1e9 / facets.len() as f64
+            times.best * 1e9 / facets.len() as f64,
+            times.median * 1e9 / facets.len() as f64
         );
         return ExitCode::SUCCESS;
     }
     let mut out = vec![None; queries.len()];
-    let best = pool.install(|| {
+    let times = pool.install(|| {
         if mode == "closest" || mode == "random" {
-            best_of(reps, || {
+            timed(reps, || {
                 bvh.closest_all_into(&surface, &queries, f64::INFINITY, &mut out)
                     .expect("one answer per query");
             })
@@ -130,7 +131,7 @@ fn main() -> ExitCode {
                 .expect("lists for the torus");
             let moved = scenes::deformed(&nodes, h, 0.01);
             let mut tree = bvh.clone();
-            best_of(reps, || {
+            timed(reps, || {
                 lists
                     .closest_all_into(
                         &mut tree,
@@ -147,8 +148,8 @@ fn main() -> ExitCode {
     println!(
         "{mode}, {} facets: {:.1} ns per query (best of {reps} calls, {cores}; median {:.1})",
         facets.len(),
-        best.best * 1e9 / queries.len() as f64,
-        best.median * 1e9 / queries.len() as f64
+        times.best * 1e9 / queries.len() as f64,
+        times.median * 1e9 / queries.len() as f64
     );
     ExitCode::SUCCESS
 }
@@ -175,8 +176,8 @@ fn walk(
     };
     let mut ends = vec![None; queries.len()];
     let mut measured = 0usize;
-    let best = pool.install(|| {
-        best_of(reps, || {
+    let times = pool.install(|| {
+        timed(reps, || {
             measured = 0;
             for ((q, start), end) in queries.iter().zip(&before).zip(ends.iter_mut()) {
                 let Some(start) = start else { continue };
@@ -210,13 +211,13 @@ fn walk(
     println!(
         "walk, {} facets: {:.1} ns per query (best of {reps} calls, one core); {:.2} facets measured per query, {differ} answers differ from the tree",
         surface.len(),
-        best.best * 1e9 / n,
+        times.best * 1e9 / n,
         measured as f64 / n
     );
 }
 
 /// The shortest and the median of `reps` wall-clock times of `f`, in seconds.
-fn best_of(reps: usize, mut f: impl FnMut()) -> Times {
+fn timed(reps: usize, mut f: impl FnMut()) -> Times {
     let mut times: Vec<f64> = (0..reps)
         .map(|_| {
             let t = Instant::now();
@@ -231,7 +232,7 @@ fn best_of(reps: usize, mut f: impl FnMut()) -> Times {
     }
 }
 
-/// What [`best_of`] measured, in seconds.
+/// What [`timed`] measured, in seconds.
 #[derive(Clone, Copy)]
 struct Times {
     best: f64,

@@ -108,12 +108,13 @@
 //! each facet's own bound, by `search_bench`), but the groups' pass gathered 1.64 nodes per query
 //! out of order and took 6.6–8.6 ms a call, and the rest of a call, each query looking up its
 //! group's motion, was no faster than before: 50.8–52.1 against 36.7–37.7 ns per query in all
-//! (best of 20 calls, three interleaved rounds). The screen with no motions at all (`T = 0`, the spread `δ`) measured more
-//! facets and took 50.8 against 36.8 ns. Also not kept: the node motions in `f32` (16 bytes per
-//! node instead of 24; the bound then needs a slack of a few `f32` roundings of `δ`): 39.1 vs 38.8
-//! ns; the answers written with non-temporal stores, timed by the mean of 20 calls rather than the
-//! best: 42.8 vs 42.1 ns. With another process copying memory on the second core, a call took
-//! 44.1 instead of 41.9 ns while the full query was unaffected (354.0 vs 370.7 ns).
+//! (best of 20 calls, three interleaved rounds). The screen with no motions at all (`T = 0`, the
+//! spread `δ`) measured more facets and took 50.8 against 36.8 ns. Also not kept: the node motions
+//! in `f32` (16 bytes per node instead of 24; the bound then needs a slack of a few `f32`
+//! roundings of `δ`): 39.1 vs 38.8 ns; the answers written with non-temporal stores, timed by the
+//! mean of 20 calls rather than the best: 42.8 vs 42.1 ns. With another process copying memory on
+//! the second core, a call took 44.1 instead of 41.9 ns while the full query was unaffected (354.0
+//! vs 370.7 ns).
 //!
 //! A query whose answer is not certified falls back to the tree, which
 //! [`Neighbourhoods::closest_all`] updates first, once, only if some query needs it: the certified
