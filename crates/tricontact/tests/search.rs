@@ -896,3 +896,25 @@ fn non_finite_positions_and_queries_in_the_incremental_search() {
         assert!(bvh.within(&surface, &odd[k], f64::INFINITY).is_empty());
     }
 }
+
+/// A query that was almost on a facet `f` (closer than the lists' direction floor, so that `f`
+/// is listed without a direction) and then moves onto it: `f` is the answer now, and no bound may
+/// exclude it. Two facets folded at a right angle along the `x` axis: `F` in the plane `z = 0`
+/// (`y ≤ 0`), `f` in the plane `y = 0` (`z ≥ 0`); the query starts on `F`, 10⁻⁷ from the fold,
+/// and ends on `f`, 5·10⁻⁸ above it, where `F` is 5·10⁻⁸ away.
+#[test]
+fn a_query_moving_onto_a_facet_listed_without_direction_finds_it() {
+    let nodes = vec![
+        Vec3::new(-1.0, 0.0, 0.0),
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::new(0.0, -1.0, 0.0),
+        Vec3::new(0.0, 0.0, 1.0),
+    ];
+    let surface = Surface::new(vec![[0, 1, 2], [1, 0, 3]], nodes.len()).unwrap();
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    let before = [Query::point(Vec3::new(0.1, -1e-7, 0.0))];
+    let lists = Neighbourhoods::new(&bvh, &surface, &nodes, &before, 0.01).unwrap();
+    let after = [Query::point(Vec3::new(0.1, 0.0, 5e-8))];
+    let stats = incremental_matches_tree(&lists, &surface, &nodes, &after);
+    assert_eq!(stats.queries, 1);
+}

@@ -33,8 +33,11 @@
 //! them (on the benchmark's torus after a motion of 0.01 element sizes: 1.2 facets measured per
 //! query instead of 2.0 with the Lipschitz bound alone). The stored `d₀(f)` is rounded down, `n̂`
 //! decoded within `DIRECTION_ERROR` (7·10⁻³) (times `|p − p₀ − T|₁`), and a margin of 10⁻⁹ of the
-//! coordinates' magnitude absorbs rounding in all these bounds; where `p₀` was within 10⁻⁶ of that
-//! magnitude of a facet, its `n̂` is zero (the subgradient 0, exact).
+//! coordinates' magnitude absorbs rounding in all these bounds. Where `p₀` was within 10⁻⁶ of that
+//! magnitude of a listed facet, its direction is not reliable (rounding) and is not stored: the
+//! entry keeps the distance `0` and no direction, which no bound can exclude, so that facet is
+//! measured. (Zero is a subgradient only where the distance is zero: a query that was `10⁻⁷` from
+//! a facet and moves onto it must find it, a test.)
 //!
 //! Candidates are measured with the kernel the tree uses ([`crate::distance_squared_to_triangle`],
 //! bit for bit) and compared in the same total order (distance, then facet index), so the answer
@@ -992,20 +995,25 @@ fn record(
 }
 
 /// The list entry of `facet` for query `q` at `positions`, `d2` its squared distance from the tree.
+/// Within the direction floor the entry has no direction and the distance zero, which no bound can
+/// exclude (a facet the query was almost on is measured).
 fn entry(surface: &Surface, positions: &[Vec3], q: &Query, facet: u32, d2: f64) -> Entry {
     let [a, b, c] = surface.corners(facet, positions);
     let (closest, _) = closest_point_and_distance_squared(&a, &b, &c, &q.point);
     let d = closest.distance;
     let floor = DIRECTION_FLOOR * (q.point.amax() + closest.point.amax());
-    let direction = if d > floor {
-        Direction::encode(&((q.point - closest.point) / d))
+    if d > floor {
+        Entry {
+            facet,
+            distance: round_down(d2.sqrt()),
+            direction: Direction::encode(&((q.point - closest.point) / d)),
+        }
     } else {
-        Direction::ZERO
-    };
-    Entry {
-        facet,
-        distance: round_down(d2.sqrt()),
-        direction,
+        Entry {
+            facet,
+            distance: 0.0,
+            direction: Direction::ZERO,
+        }
     }
 }
 
