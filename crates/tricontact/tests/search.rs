@@ -918,3 +918,74 @@ fn a_query_moving_onto_a_facet_listed_without_direction_finds_it() {
     let stats = incremental_matches_tree(&lists, &surface, &nodes, &after);
     assert_eq!(stats.queries, 1);
 }
+
+/// A bumpy grid (`2·6²` facets of size `1/6`, heights random within a third of an element, so
+/// neighbouring facets meet at various angles), query points on or near its facets at distances
+/// from 10⁻⁹ to 10⁻¹ (on faces, edges and vertices), and node and query motions from 10⁻¹⁰ to
+/// 10⁻² (smooth, or each node on its own): the incremental search gives the tree's answers, bit
+/// for bit, at every scale, including the scales of the bounds' margins and direction floor.
+fn bumpy_grid_at_every_scale(seed: u64) {
+    let mut r = scenes::uniform(seed);
+    let h = 1.0 / 6.0;
+    let (mut nodes, facets) = grid(6, h);
+    for p in &mut nodes {
+        p.z = (r() - 0.5) * h / 3.0;
+    }
+    let surface = Surface::new(facets.clone(), nodes.len()).unwrap();
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    let scale = |t: f64, lo: i32, hi: i32| 10f64.powf(f64::from(lo) + t * f64::from(hi - lo));
+    let queries: Vec<Query> = (0..60)
+        .map(|k| {
+            let [a, b, c] = surface.corners((k * 7) % facets.len() as u32, &nodes);
+            // On a face, an edge (one weight zero) or a vertex (two zero).
+            let (mut u, mut v) = (r(), r());
+            if u + v > 1.0 {
+                (u, v) = (1.0 - u, 1.0 - v);
+            }
+            match k % 4 {
+                1 => u = 0.0,
+                2 => (u, v) = (0.0, 0.0),
+                _ => {}
+            }
+            let on = a + (b - a) * u + (c - a) * v;
+            let normal = (b - a).cross(&(c - a)).normalize();
+            let sign = if k % 3 == 0 { -1.0 } else { 1.0 };
+            Query::point(on + normal * (sign * scale(r(), -9, -1)))
+        })
+        .collect();
+    let skin = h * scale(r(), -2, 0);
+    let lists = Neighbourhoods::new(&bvh, &surface, &nodes, &queries, skin).unwrap();
+    for round in 0..6 {
+        let size = scale(r(), -10, -2);
+        let jitter = round % 2 == 1;
+        let moved: Vec<Vec3> = nodes
+            .iter()
+            .map(|p| {
+                let smooth = Vec3::new(p.y, -p.x, 0.5 * p.x * p.y) * size;
+                let own = Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5) * size;
+                p + if jitter { own } else { smooth }
+            })
+            .collect();
+        let qs: Vec<Query> = queries
+            .iter()
+            .map(|q| {
+                let step = if round < 2 {
+                    0.0
+                } else {
+                    size * scale(r(), -1, 1)
+                };
+                Query::point(q.point + Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5) * step)
+            })
+            .collect();
+        incremental_matches_tree(&lists, &surface, &moved, &qs);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(200))]
+
+    #[test]
+    fn incremental_search_matches_the_tree_at_every_scale(seed in any::<u64>()) {
+        bumpy_grid_at_every_scale(seed);
+    }
+}
