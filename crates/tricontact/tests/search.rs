@@ -924,12 +924,16 @@ fn a_query_moving_onto_a_facet_listed_without_direction_finds_it() {
 /// from 10⁻⁹ to 10⁻¹ (on faces, edges and vertices), and node and query motions from 10⁻¹⁰ to
 /// 10⁻² (smooth, or each node on its own): the incremental search gives the tree's answers, bit
 /// for bit, at every scale, including the scales of the bounds' margins and direction floor.
-fn bumpy_grid_at_every_scale(seed: u64) {
+///
+/// The grid is scaled by `size` and moved by `offset`, so that the same scene is searched at other
+/// magnitudes of the coordinates (the tree's boxes are rounded to `f32`, the margins are relative).
+fn bumpy_grid_at_every_scale(seed: u64, size: f64, offset: f64) {
     let mut r = scenes::uniform(seed);
-    let h = 1.0 / 6.0;
+    let h = size / 6.0;
     let (mut nodes, facets) = grid(6, h);
     for p in &mut nodes {
         p.z = (r() - 0.5) * h / 3.0;
+        *p += Vec3::new(offset, -0.5 * offset, 0.25 * offset);
     }
     let surface = Surface::new(facets.clone(), nodes.len()).unwrap();
     let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
@@ -950,19 +954,20 @@ fn bumpy_grid_at_every_scale(seed: u64) {
             let on = a + (b - a) * u + (c - a) * v;
             let normal = (b - a).cross(&(c - a)).normalize();
             let sign = if k % 3 == 0 { -1.0 } else { 1.0 };
-            Query::point(on + normal * (sign * scale(r(), -9, -1)))
+            Query::point(on + normal * (sign * size * scale(r(), -9, -1)))
         })
         .collect();
     let skin = h * scale(r(), -2, 0);
     let lists = Neighbourhoods::new(&bvh, &surface, &nodes, &queries, skin).unwrap();
     for round in 0..6 {
-        let size = scale(r(), -10, -2);
+        let step = size * scale(r(), -10, -2);
         let jitter = round % 2 == 1;
         let moved: Vec<Vec3> = nodes
             .iter()
             .map(|p| {
-                let smooth = Vec3::new(p.y, -p.x, 0.5 * p.x * p.y) * size;
-                let own = Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5) * size;
+                let local = (p - nodes[0]) / size;
+                let smooth = Vec3::new(local.y, -local.x, 0.5 * local.x * local.y) * step;
+                let own = Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5) * step;
                 p + if jitter { own } else { smooth }
             })
             .collect();
@@ -978,6 +983,12 @@ fn bumpy_grid_at_every_scale(seed: u64) {
             })
             .collect();
         incremental_matches_tree(&lists, &surface, &moved, &qs);
+        // And the tree is brute force's.
+        let tree = Bvh::build(&surface, &moved, 0.0).unwrap();
+        for q in &qs {
+            let expected = brute_force_closest(&surface, &moved, q, f64::INFINITY);
+            same(tree.closest(&surface, q, f64::INFINITY), expected).unwrap();
+        }
     }
 }
 
@@ -985,7 +996,11 @@ proptest! {
     #![proptest_config(ProptestConfig::with_cases(200))]
 
     #[test]
-    fn incremental_search_matches_the_tree_at_every_scale(seed in any::<u64>()) {
-        bumpy_grid_at_every_scale(seed);
+    fn incremental_search_matches_the_tree_at_every_scale(
+        seed in any::<u64>(),
+        size in -6..4i32,
+        offset in prop_oneof![Just(0.0), 1.0..1e7f64],
+    ) {
+        bumpy_grid_at_every_scale(seed, 10f64.powi(size), offset);
     }
 }
