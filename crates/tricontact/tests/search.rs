@@ -921,9 +921,12 @@ fn a_query_moving_onto_a_facet_listed_without_direction_finds_it() {
 
 /// A bumpy grid (`2·6²` facets of size `1/6`, heights random within a third of an element, so
 /// neighbouring facets meet at various angles), query points on or near its facets at distances
-/// from 10⁻⁹ to 10⁻¹ (on faces, edges and vertices), and node and query motions from 10⁻¹⁰ to
-/// 10⁻² (smooth, or each node on its own): the incremental search gives the tree's answers, bit
-/// for bit, at every scale, including the scales of the bounds' margins and direction floor.
+/// from 10⁻⁹ to 10⁻¹ (on faces, edges and vertices) and queries at its nodes (self-contact: each
+/// skips its own facets and moves with its node), and node motions from 10⁻¹⁰ to 10⁻² (smooth, or
+/// each node on its own) with the point queries fixed, moved as much, or moved by up to ten
+/// elements, within an unbounded or a finite search distance: the incremental search gives the
+/// tree's answers, bit for bit, at every scale, including the scales of the bounds' margins and
+/// direction floor; and the tree gives brute force's.
 ///
 /// The grid is scaled by `size` and moved by `offset`, so that the same scene is searched at other
 /// magnitudes of the coordinates (the tree's boxes are rounded to `f32`, the margins are relative).
@@ -938,7 +941,8 @@ fn bumpy_grid_at_every_scale(seed: u64, size: f64, offset: f64) {
     let surface = Surface::new(facets.clone(), nodes.len()).unwrap();
     let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
     let scale = |t: f64, lo: i32, hi: i32| 10f64.powf(f64::from(lo) + t * f64::from(hi - lo));
-    let queries: Vec<Query> = (0..60)
+    let points = 60;
+    let mut queries: Vec<Query> = (0..points)
         .map(|k| {
             let [a, b, c] = surface.corners((k * 7) % facets.len() as u32, &nodes);
             // On a face, an edge (one weight zero) or a vertex (two zero).
@@ -957,9 +961,15 @@ fn bumpy_grid_at_every_scale(seed: u64, size: f64, offset: f64) {
             Query::point(on + normal * (sign * size * scale(r(), -9, -1)))
         })
         .collect();
+    let own = |n: u32, at: &[Vec3]| Query {
+        point: at[n as usize],
+        exclude: Some(n),
+    };
+    let node_count = u32::try_from(nodes.len()).unwrap();
+    queries.extend((0..node_count).step_by(3).map(|n| own(n, &nodes)));
     let skin = h * scale(r(), -2, 0);
     let lists = Neighbourhoods::new(&bvh, &surface, &nodes, &queries, skin).unwrap();
-    for round in 0..6 {
+    for round in 0..8 {
         let step = size * scale(r(), -10, -2);
         let jitter = round % 2 == 1;
         let moved: Vec<Vec3> = nodes
@@ -971,23 +981,33 @@ fn bumpy_grid_at_every_scale(seed: u64, size: f64, offset: f64) {
                 p + if jitter { own } else { smooth }
             })
             .collect();
+        let far = match round / 2 {
+            0 => 0.0,
+            1 | 3 => step * scale(r(), -1, 1),
+            _ => size * scale(r(), -2, 1),
+        };
         let qs: Vec<Query> = queries
             .iter()
-            .map(|q| {
-                let step = if round < 2 {
-                    0.0
-                } else {
-                    size * scale(r(), -1, 1)
-                };
-                Query::point(q.point + Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5) * step)
+            .map(|q| match q.exclude {
+                Some(n) => own(n, &moved),
+                None => Query::point(q.point + Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5) * far),
             })
             .collect();
-        incremental_matches_tree(&lists, &surface, &moved, &qs);
-        // And the tree is brute force's.
-        let tree = Bvh::build(&surface, &moved, 0.0).unwrap();
-        for q in &qs {
-            let expected = brute_force_closest(&surface, &moved, q, f64::INFINITY);
-            same(tree.closest(&surface, q, f64::INFINITY), expected).unwrap();
+        let max = if round >= 6 {
+            h * scale(r(), -3, 0)
+        } else {
+            f64::INFINITY
+        };
+        let mut tree = Bvh::build(&surface, &moved, 0.0).unwrap();
+        let expected = tree.closest_all(&surface, &qs, max);
+        let (hits, _) = lists
+            .closest_all(&mut tree, &surface, &moved, &qs, max)
+            .unwrap();
+        for (i, (a, b)) in hits.iter().zip(&expected).enumerate() {
+            assert_eq!(a, b, "round {round}, query {i}");
+        }
+        for (q, hit) in qs.iter().zip(&expected) {
+            same(*hit, brute_force_closest(&surface, &moved, q, max)).unwrap();
         }
     }
 }
