@@ -926,7 +926,8 @@ fn a_query_moving_onto_a_facet_listed_without_direction_finds_it() {
 /// each node on its own) with the point queries fixed, moved as much, or moved by up to ten
 /// elements, within an unbounded or a finite search distance: the incremental search gives the
 /// tree's answers, bit for bit, at every scale, including the scales of the bounds' margins and
-/// direction floor; and the tree gives brute force's.
+/// direction floor; and the tree, built or refitted, gives brute force's closest facet and facets
+/// within a distance.
 ///
 /// The grid is scaled by `size` and moved by `offset`, so that the same scene is searched at other
 /// magnitudes of the coordinates (the tree's boxes are rounded to `f32`, the margins are relative).
@@ -1006,8 +1007,26 @@ fn bumpy_grid_at_every_scale(seed: u64, size: f64, offset: f64) {
         for (i, (a, b)) in hits.iter().zip(&expected).enumerate() {
             assert_eq!(a, b, "round {round}, query {i}");
         }
+        // The tree refitted from the initial positions, against brute force: the closest facet,
+        // and every facet within the search distance (or a tenth of the grid).
+        let mut refitted = bvh.clone();
+        refitted.update(&surface, &moved).unwrap();
+        let radius = max.min(0.1 * size);
         for (q, hit) in qs.iter().zip(&expected) {
-            same(*hit, brute_force_closest(&surface, &moved, q, max)).unwrap();
+            let reference = brute_force_closest(&surface, &moved, q, max);
+            same(*hit, reference).unwrap();
+            same(refitted.closest(&surface, q, max), reference).unwrap();
+            let mut near: Vec<Hit> = (0..surface.len() as u32)
+                .filter(|&f| !q.excludes(&surface, f))
+                .filter(|&f| {
+                    let [a, b, c] = surface.corners(f, &moved);
+                    tricontact::Facet::new(a, b, c).is_ok()
+                        && distance_squared_to_triangle(&a, &b, &c, &q.point) <= radius * radius
+                })
+                .filter_map(|f| measure(&surface, &moved, f, q))
+                .collect();
+            tricontact::search::sort_hits(&mut near);
+            assert_eq!(refitted.within(&surface, q, radius), near, "round {round}");
         }
     }
 }
