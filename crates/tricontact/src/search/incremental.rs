@@ -182,7 +182,8 @@ use crate::search::screen::{Bounds, Limits, Listed, NEAR, Stage};
 use crate::search::surface::{Surface, SurfaceError};
 
 /// Below this distance, relative to the magnitude of the coordinates, a listed facet's direction
-/// is not stored (zero): its rounding error could exceed [`DIRECTION_ERROR`](crate::search::direction::DIRECTION_ERROR).
+/// is not stored (zero; its rounding error could exceed [`DIRECTION_ERROR`](crate::search::direction::DIRECTION_ERROR)) and its distance is
+/// taken as zero.
 const DIRECTION_FLOOR: f64 = 1e-6;
 
 /// Queries answered in one sequential run of [`Neighbourhoods::closest_all_into`].
@@ -206,7 +207,8 @@ pub struct IncrementalStats {
 struct Entry {
     /// The facet (for an empty place of a [`Head`], its first listed facet).
     facet: u32,
-    /// Its distance then, rounded down to `f32` (`+∞` for an empty place in a [`Head`]).
+    /// Its distance then, rounded down to `f32` (zero within [`DIRECTION_FLOOR`], `+∞` for an
+    /// empty place in a [`Head`]).
     distance: f32,
     /// The direction from its closest point then to the query point then (or zero).
     direction: Direction,
