@@ -45,100 +45,30 @@
 //!
 //! # Order of work
 //! Each node's motion `x − x₀` is computed once per call, with `δ`, the longest, in the same
-//! pass; the bounds read it (one array instead of the positions and the reference positions, and
-//! no subtraction per facet: 8 % faster at 10⁵ queries, medians of eight interleaved runs). The
-//! motions go into a buffer the calling thread keeps from call to call: at 10⁶ facets a new one
-//! (12 MB) was mapped and zeroed by the system at every call, and the motions and `δ` took two
-//! passes (4.5 ms of a 52 ms call on one core; now 2.7 ms).
-//! Queries go in chunks of 256 (in parallel); within a chunk, a group at a time (one per lane:
-//! eight with AVX-512, four otherwise), their first listed facets are measured together
-//! (`search::lanes`) and written as the answers, and
-//! each query is screened: every facet the bounds cannot exclude is put aside (all exclusions are
-//! against the first facet's distance; measuring others can only lower it). The queries whose
-//! lists must be walked beyond the record then walk them, their first further entries read all
-//! together so that their fetches from memory overlap, and prefetched as soon as a query is found
-//! to walk (the walks run at the chunk's end: on the 10⁶-facet torus the prefetch took a call from
-//! 53.1 to 49.5 ns per query, best of eight interleaved runs, and 53.6 to 51.6 in six more). The
-//! facets put aside are then measured a vector of lanes at a time, and a better one replaces
-//! the answer. A query whose first listed facet is missing (empty list, or excluded by the
-//! query) goes through the same tests one facet at a time; a query at NaN or infinity has no
-//! answer, as in the tree.
+//! pass, into a buffer the calling thread keeps from call to call; the bounds read it (one array
+//! instead of the positions and the reference positions, and no subtraction per facet). Queries
+//! go in chunks of 256 (in parallel); within a chunk, a group at a time (one per lane: eight with
+//! AVX-512, four otherwise), their first listed facets are measured together (`search::lanes`)
+//! and written as the answers, and each query is screened: every facet the bounds cannot exclude
+//! is put aside (all exclusions are against the first facet's distance; measuring others can only
+//! lower it). The queries whose lists must be walked beyond the record then walk them, their first
+//! further entries read all together so that their fetches from memory overlap. The facets put
+//! aside are then measured a vector of lanes at a time, and a better one replaces the answer. A
+//! query whose first listed facet is missing (empty list, or excluded by the query) goes through
+//! the same tests one facet at a time; a query at NaN or infinity has no answer, as in the tree.
+//! What the chunk's end reads is asked for early (the lines of a walk's first and sixth further
+//! entries as soon as the query is found to walk, the corners of a facet when it is put aside),
+//! and the answers' lines are asked for with the intent to write them (`prefetchw`) four groups
+//! ahead.
 //!
-//! What the chunk's end reads is asked for early: the line of a walk's sixth further entry as well
-//! as its first (a walk reads 3.7 on the 10⁶-facet torus, twelve bytes each), and the corners of a
-//! facet when it is put aside. The answers' lines are asked for with the intent to write them
-//! (`prefetchw`) four groups ahead. Measured on that torus after a motion of 0.01 element sizes,
-//! where 17.8 % of the queries need more than their first facet (6.7 % walk; 0.15 facets put aside
-//! per query), best of 15 calls in interleaved runs on one core (AMD EPYC, Zen 4): the first two
-//! took a call from 48.1–50.0 to 42.7–45.4 ns per query in three rounds (49.6 to 44.6 at 10⁵
-//! facets); the write requests then from 45.0–45.1 to 41.7–43.0 in two rounds. Before them, timing
-//! runs with parts of the work removed put about 8 ns of 50 in writing the answers (80 bytes each)
-//! and 14 ns in the queries that need more than their first facet; after them, the time-stamp
-//! counter puts 7 counts (2.6 GHz) of a query's 112 in the walks and 7 in the facets put aside.
-//! Not kept: each group staged while the previous one is measured (two sets of staging buffers,
-//! so that the lanes' loads never wait for the staging stores), slower (42.3 vs 38.5 ns); the
-//! answers written with non-temporal (streaming) stores, which skip reading their lines, instead
-//! of those lines asked for ahead: slower (39.3 vs 37.9 ns at 10⁶, best of five interleaved
-//! rounds).
-//!
-//! Where the time goes, by removing parts (10⁶ facets, motion 0.01 element sizes, best of 30 calls
-//! in four or more interleaved rounds): with the screen's outcome replaced by "certified" and the
-//! screen itself left out, a call took 20.7 ns per query against 39.3–40.3 for the search, so the
-//! record, the corners, the lanes' measure, the answers and the node motions are half of it; the
-//! screen (two listed facets staged per query, and the bounds in the lanes) adds 8.5 ns (29.2 with
-//! its outcome computed and then ignored), the walks about 5 (34.6 with no query walking) and the
-//! facets put aside the rest: about 57 ns on average for each of the 17.8 % of queries that need
-//! more than their first facet (75 for a walk). Not writing the answers saved nothing measurable
-//! (38.1 vs 38.1 ns): their writes are hidden. Not kept, in the light of those figures: the listed
-//! facets' node motions staged as read and turned into translations and spreads in the lanes, one
-//! vector operation for all lanes instead of scalar arithmetic per lane: within noise (42.1 vs 42.0
-//! ns; thirteen stores per facet and lane instead of eight); the listed facets staged only where
-//! the Lipschitz bound, tested in the lanes once the first facets are measured, does not exclude
-//! them (it excludes 60 % of them): slower (42.4 vs 39.3 ns, and 43.2 vs 40.1 with their facets
-//! asked for early); the facets and node motions of a walk's first four further entries asked for
-//! before the walks: within noise (40.5 vs 40.3 ns); one listed facet in the record instead of two:
-//! slower (48.2 vs 41.4 ns; more walks); chunks of 128 or 512 queries instead of 256: within noise
-//! (40.6 and 39.9 vs 39.9 ns). What is left is spread over the per-lane work (no instruction stands
-//! out in a profile); a bound for the walks that needs no node motion per listed facet (for
-//! instance a deformation bound per region of the surface, computed once per call) is the change
-//! these figures point to.
-//!
-//! Such a bound, tried for the screen first, did not pay. Queries grouped 32 at a time along a
-//! Hilbert curve through their points then; per call and group, `T` the centre of the box of the
-//! motions of the nodes of the group's screened facets and the spread the largest `|m − T|₁` among
-//! them; the screen read these instead of each facet's motions. On the 10⁶-facet torus at 0.01
-//! element sizes the group spread was a tenth of `δ` and a query measured 1.27 facets (1.15 with
-//! each facet's own bound, by `search_bench`), but the groups' pass gathered 1.64 nodes per query
-//! out of order and took 6.6–8.6 ms a call, and the rest of a call, each query looking up its
-//! group's motion, was no faster than before: 50.8–52.1 against 36.7–37.7 ns per query in all
-//! (best of 20 calls, three interleaved rounds). The screen with no motions at all (`T = 0`, the
-//! spread `δ`) measured more facets and took 50.8 against 36.8 ns. Also not kept: the node motions
-//! in `f32` (16 bytes per node instead of 24; the bound then needs a slack of a few `f32`
-//! roundings of `δ`): 39.1 vs 38.8 ns; the answers written with non-temporal stores, timed by the
-//! mean of 20 calls rather than the best: 42.8 vs 42.1 ns. With another process copying memory on
-//! the second core, a call took 44.1 instead of 41.9 ns while the full query was unaffected (354.0
-//! vs 370.7 ns).
-//!
-//! A bound for the whole rest of a list, read from the record alone, did not pay either. With one
-//! `T` per query (the motion of the first facet's first node `a`), a listed facet `f` obeys
-//! `d(f) ≥ d₀(f) − c_f X + n̂(F)·v − G P_f`, where `v = p − p₀ − T`, `X ≥ |v|`,
-//! `c_f = |n̂(f) − n̂(F)|`, `P_f` the longest path along listed edges from `a` to a node of `f`
-//! (from the lists' positions) and `G` the largest `|Δm| / |Δx₀|` over the surface's edges this
-//! call. The record kept `min_f (d₀(f) − c_f X_k)` at three motions `X_k` (fractions of the skin),
-//! the largest `P_f`, and up to two facets too close to the first to be bounded, which were
-//! measured outright. On the 10⁵-facet torus at 0.01 element sizes the bound held for 69–83 % of
-//! the queries (according to how close a facet had to be to count as tied; 17–50 % had one),
-//! against 82 % certified by the first facet with the per-facet bounds: `G P_f` is the worst case
-//! of the motion of `f` relative to `a` in any direction, where the per-facet bound sees the
-//! actual motions (with `G` set to zero, 96 % held). Computing `G` took 6.7–8.4 ms a call at 10⁶
-//! facets, and a call 49.6 against 39.9 ns per query (best of three rounds of 30 calls). As a
-//! bound for the rest of the list beyond two facets (the two it bounds worst, standing for the
-//! record's two screened ones; it would replace the Lipschitz bound on the fourth), it held for
-//! 99.0 % of the queries at 10⁶ facets (97.6 % at 10⁵) where the Lipschitz bound holds for 93.3 %,
-//! which would spare most walks (about 5 ns a query), but computing `G` costs more than that.
-//! Measuring the record's two listed facets outright in the lanes, beside the first, instead of
-//! screening them (no bound for them, nothing put aside, no node motion but in the walks) was
-//! slower too: 47.3–48.3 against 38.2–40.5 ns per query (three interleaved rounds of 30 calls).
+//! On the 10⁶-facet torus after a motion of 0.01 element sizes, 17.8 % of the queries need more
+//! than their first facet (6.7 % walk; 0.15 facets put aside per query), and a call takes 38–40 ns
+//! a query on one core (AMD EPYC, Zen 4), of which 20.7 remain with the screen and all that
+//! follows removed: the screen costs about 8.5 ns, the walks about 5, the facets put aside the
+//! rest. The measurements behind each choice above, and the alternatives measured and not kept
+//! (among them bounds for a group of queries or for a whole list that read no motion per listed
+//! facet, and the record's listed facets measured instead of screened), are in
+//! `docs/search-benchmarks.md` ("The incremental search, as measured").
 //!
 //! A query whose answer is not certified falls back to the tree, which
 //! [`Neighbourhoods::closest_all`] updates first, once, only if some query needs it: the certified

@@ -15,62 +15,11 @@
 //!
 //! On the 10⁵-facet torus of the benchmark a packet gathers about 42 leaves (of up to eight
 //! facets, in an AVX-512 build) in 42 node visits, and a query lists 4.3 of them, the previous
-//! answer's among them, and measures them all. Tried and not kept (measured on that scene with
-//! leaves of up to four facets, when a packet gathered 69 leaves in 62 node visits and a query
-//! listed 5.7 and measured 5):
-//! a cylinder ("puck") bound per leaf, centre, normal, radius and thickness, which would cut the
-//! measured leaves to 3.2 but made the query 6 % slower (its data and square root cost more than
-//! the leaves it saves); branch-free child selection in the gathering and prefetching the
-//! listed leaves (within noise); packets of 8, 24 or 32 (within 5 %); a gathering radius of 1.5
-//! times the previous answers (25 % slower); the gathering tested against the boxes of four
-//! slices of the packet instead of its box (62 leaves gathered instead of 69, but the extra box
-//! tests cost as much: within noise); prefetching each gathered leaf's corners as it is gathered
-//! (2–3 % slower on the 10⁶-facet torus, in four interleaved runs). With leaves of eight: an
-//! oriented box per leaf (mean normal, an edge made orthogonal to it, half-extents along them),
-//! which cut the listed leaves from 4.3 to 2.7 per query on the 10⁵ torus but cost what they
-//! saved (389 vs 390 ns tested on the listed leaves; 447 vs 413 ns gathered beside the boxes).
-//! Each listed leaf's facets tested by their own boxes first (2.6 of 3.3 listed groups hold a
-//! facet within the bound, 5.1 facets in all): skipping the groups with none, no faster; the kept
-//! facets compacted into full groups before measuring them, slower (425 vs 416 ns at 10⁵, 492 vs
-//! 455 at 10⁶, AVX-512 `vcompresspd` per row). One gathering for two packets, narrowed to each
-//! packet's box before its queries: slower (384–400 vs 371–373 ns at 10⁵, 453–460 vs 428 at 10⁶).
-//! The answers' lines asked for with the intent to write two packets ahead (which the incremental
-//! search gains from): within noise (with vs without, 396 vs 404 and 388 vs 369 ns at 10⁶, 391
-//! vs 391 at 10⁵). A gathering radius of 1.1 or 1.15 times the previous answers instead of 1.25:
-//! within noise (357.9 and 359.2 vs 357.5 ns at 10⁶).
-//!
-//! A lower bound per facet from its plane and the half-spaces of its edges, `d² ≥ t² + max(s, 0)²`
-//! (`t` the distance to the plane, `s` the largest distance outside an edge, measured in the
-//! plane), stored beside the corner rows in `f32` relative to an origin per group (twenty values
-//! per facet, with a slack for rounding): of the 3.3 leaves (10⁵ facets) and 3.4 (10⁶) a query
-//! lists beside the previous answer's, 19 facets in all, 1.05 and 1.09 hold a facet within that
-//! bound (1.8 facets; the facets' own boxes keep 5.5). `search_loop closest`, best of interleaved
-//! rounds: the leaves without one skipped by a branch, slower (365–371 vs 357–358 ns at 10⁶); the
-//! listed leaves with one compacted and measured whole, 345 vs 358 ns at 10⁶ and 324 vs 339 at 10⁵
-//! (after the test's bounds checks were hoisted, about 100 instructions per leaf; with them,
-//! slower); the facets within the bound staged into one group of eight, 342 vs 356 ns at 10⁶, 318
-//! vs 337 at 10⁵ (before the hoisting, 285 vs 306 at 10⁴; staged by AVX-512 gathers instead of
-//! copies, slower: 388 vs 376 at 10⁶); on top of that, the previous answer's leaf left unmeasured
-//! when one of its facets' bounds holds the query's foot (its `|t|`, with the slack, then bounds
-//! the distance from above), slower (359 vs 340 ns): half the queries have no such facet in that
-//! leaf; the previous answer's facet measured by the scalar kernel instead, then the bound tested
-//! on every listed leaf, slower (405 vs 352 ns: the scalar kernel's branches). The bound doubles
-//! the tree's rows (80 bytes more per facet) and, computed facet by facet, took the build from 185
-//! to 313 ns per facet and the refit from 53 to 135 (one core): 4–6 % faster queries do not pay for
-//! that. Measuring each listed leaf twice costs 131–135 ns more per query (at 10⁵ and 10⁶, the
-//! second time from cache), yet leaving two of three unmeasured saved only 14–19 ns net of the
-//! bound's own cost: the measurements overlap with the rest of the work. Starting each query from
-//! the leaf of the answer two queries back, so that consecutive queries need not wait for each
-//! other: slower (380 vs 356 ns at 10⁶, 358 vs 337 at 10⁵). Each packet gathered while the one
-//! before it is answered (with the radius from the packet before that), its leaves' rows
-//! prefetched as they are gathered, so that they arrive a packet ahead: within noise, with or
-//! without the prefetches (360.2 and 360.8 vs 358.2 ns at 10⁶, best of eight interleaved rounds).
-//! With the leaves cut by `search::leaves` (best of four interleaved rounds at 10⁶ unless said):
-//! packets of 24 or 32, slower (343.9 and 354.3 vs 332.7 ns); each group's rows padded to a stride
-//! of eight, so that every row load is one aligned cache line (tried with each group placed at
-//! eight rows per slot, which spreads them over more memory): 292.3 vs 299.1 ns at 10⁴, where it all
-//! sits in cache, but 372.1 vs 334.7 at 10⁶, so the split loads cost little; the rows on 2 MB pages
-//! (`madvise`): within noise (rounds of 339.9–365.1 vs 335.6–392.6 ns).
+//! answer's among them, and measures them all. The alternatives measured and not kept (bounds per
+//! leaf and per facet that would measure fewer leaves, other packet sizes and radii, prefetching,
+//! gathering ahead, padded rows, huge pages), with their figures, are in
+//! `docs/search-benchmarks.md` ("The coherent query, as measured"): fewer measurements have not
+//! bought time, since the measurements overlap with the rest of the work.
 //!
 //! # Exactness
 //! A leaf left out is farther than `R` from `Q`, hence from every query of the packet. So when a
