@@ -115,8 +115,9 @@ use crate::search::screen::{Bounds, Limits, Listed, NEAR, Stage};
 use crate::search::surface::{Surface, SurfaceError};
 
 /// Below this distance, relative to the magnitude of the coordinates, a listed facet's direction
-/// is not stored (zero; its rounding error could exceed [`DIRECTION_ERROR`](crate::search::direction::DIRECTION_ERROR)) and its distance is
-/// taken as zero.
+/// is not stored (zero; its rounding error could exceed
+/// [`DIRECTION_ERROR`](crate::search::direction::DIRECTION_ERROR)) and its distance is taken as
+/// zero.
 const DIRECTION_FLOOR: f64 = 1e-6;
 
 /// Queries answered in one sequential run of [`Neighbourhoods::closest_all_into`].
