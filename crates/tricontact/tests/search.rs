@@ -915,6 +915,9 @@ fn a_query_moving_onto_a_facet_listed_without_direction_finds_it() {
     let before = [Query::point(Vec3::new(0.1, -1e-7, 0.0))];
     let lists = Neighbourhoods::new(&bvh, &surface, &nodes, &before, 0.01).unwrap();
     let after = [Query::point(Vec3::new(0.1, 0.0, 5e-8))];
+    // The scene is as described: the query is now on `f`.
+    let now = bvh.closest(&surface, &after[0], f64::INFINITY).unwrap();
+    assert!(now.facet == 1 && now.closest.distance < 1e-15, "{now:?}");
     let stats = incremental_matches_tree(&lists, &surface, &nodes, &after);
     assert_eq!(stats.queries, 1);
 }
@@ -978,14 +981,14 @@ fn bumpy_grid_at_every_scale(seed: u64, size: f64, offset: f64) {
             .map(|p| {
                 let local = (p - nodes[0]) / size;
                 let smooth = Vec3::new(local.y, -local.x, 0.5 * local.x * local.y) * step;
-                let own = Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5) * step;
-                p + if jitter { own } else { smooth }
+                let alone = Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5) * step;
+                p + if jitter { alone } else { smooth }
             })
             .collect();
         let far = match round / 2 {
             0 => 0.0,
             1 | 3 => step * scale(r(), -1, 1),
-            _ => size * scale(r(), -2, 1),
+            _ => h * scale(r(), -2, 1),
         };
         let qs: Vec<Query> = queries
             .iter()
