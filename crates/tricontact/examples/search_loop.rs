@@ -37,7 +37,7 @@
 //! incremental, 1000000 facets: 38.1 ns per query (best of 20 calls, one core; median 39.2)
 //! build, 1000000 facets: 223.9 ns per facet (best of 4 calls, one core; median 239.4)
 //! refit, 1000000 facets: 45.4 ns per facet (best of 6 calls, one core; median 52.0)
-//! walk, 1000000 facets: 217.7 ns per query (best of 5 calls, one core); 13.16 facets measured per query, 0 answers differ from the tree
+//! walk, 1000000 facets: 218.1 ns per query (best of 5 calls, one core; median 231.1); 13.16 facets measured per query, 0 answers differ from the tree
 //! ```
 
 use std::process::ExitCode;
@@ -209,9 +209,10 @@ fn walk(
         .count();
     let n = queries.len() as f64;
     println!(
-        "walk, {} facets: {:.1} ns per query (best of {reps} calls, one core); {:.2} facets measured per query, {differ} answers differ from the tree",
+        "walk, {} facets: {:.1} ns per query (best of {reps} calls, one core; median {:.1}); {:.2} facets measured per query, {differ} answers differ from the tree",
         surface.len(),
         times.best * 1e9 / n,
+        times.median * 1e9 / n,
         measured as f64 / n
     );
 }

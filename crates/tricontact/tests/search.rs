@@ -918,8 +918,7 @@ fn a_query_moving_onto_a_facet_listed_without_direction_finds_it() {
     // The scene is as described: the query is now on `f`.
     let now = bvh.closest(&surface, &after[0], f64::INFINITY).unwrap();
     assert!(now.facet == 1 && now.closest.distance < 1e-15, "{now:?}");
-    let stats = incremental_matches_tree(&lists, &surface, &nodes, &after);
-    assert_eq!(stats.queries, 1);
+    incremental_matches_tree(&lists, &surface, &nodes, &after);
 }
 
 /// A bumpy grid (`2·6²` facets of size `1/6`, heights random within a third of an element, so

@@ -956,18 +956,16 @@ fn entry(surface: &Surface, positions: &[Vec3], q: &Query, facet: u32, d2: f64) 
     let (closest, _) = closest_point_and_distance_squared(&a, &b, &c, &q.point);
     let d = closest.distance;
     let floor = DIRECTION_FLOOR * (q.point.amax() + closest.point.amax());
-    if d > floor {
-        Entry {
-            facet,
-            distance: round_down(d2.sqrt()),
-            direction: Direction::encode(&((q.point - closest.point) / d)),
-        }
+    let (distance, direction) = if d > floor {
+        let n = (q.point - closest.point) / d;
+        (round_down(d2.sqrt()), Direction::encode(&n))
     } else {
-        Entry {
-            facet,
-            distance: 0.0,
-            direction: Direction::ZERO,
-        }
+        (0.0, Direction::ZERO)
+    };
+    Entry {
+        facet,
+        distance,
+        direction,
     }
 }
 
