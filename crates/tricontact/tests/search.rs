@@ -606,6 +606,16 @@ fn incremental_search_keeps_ties_exclusions_and_degenerate_facets_exact() {
         lists.closest_all(&mut bvh, &surface, &moved, &queries[1..], 1.0),
         Err(SurfaceError::QueryCount { .. })
     ));
+    // Another surface (here: one facet fewer, then one node more) is refused, not searched.
+    let fewer = Surface::new(surface.facets()[1..].to_vec(), nodes.len()).unwrap();
+    let more = Surface::new(surface.facets().to_vec(), nodes.len() + 1).unwrap();
+    moved.push(Vec3::zeros());
+    for other in [&fewer, &more] {
+        let err = lists
+            .closest_all(&mut bvh, other, &moved, &queries, 1.0)
+            .unwrap_err();
+        assert!(matches!(err, SurfaceError::OtherSurface { .. }), "{err}");
+    }
 }
 
 /// A query at NaN or infinity inside a coherent batch must not break the packet's certificate for

@@ -50,6 +50,20 @@ pub enum SurfaceError {
         /// Queries given.
         given: usize,
     },
+    /// An incremental search was given another surface than its lists were made on.
+    #[error(
+        "the neighbourhood lists were made on a surface of {expected_facets} facets over {expected_nodes} nodes, but this one has {facets} facets over {nodes} nodes"
+    )]
+    OtherSurface {
+        /// Facets of the surface the lists were made on.
+        expected_facets: usize,
+        /// Its nodes.
+        expected_nodes: usize,
+        /// Facets of the surface given.
+        facets: usize,
+        /// Its nodes.
+        nodes: usize,
+    },
     /// An answer buffer does not have one entry per query.
     #[error("the answer buffer holds {answers} entries for {queries} queries")]
     AnswerCount {
