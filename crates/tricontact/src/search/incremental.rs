@@ -251,7 +251,7 @@ struct Best {
 /// listed facet was read from the surface when the lists were made, so it is below the facet
 /// count, hence a facet of `surface`; each of its nodes indexes `positions` and `moves` (one per
 /// node). The hot paths read them without bounds checks on that ground (measured: 6 % less time
-/// at 10⁴ queries, 12 % fewer instructions; see `docs/search-benchmarks.md`).
+/// at 10⁴ queries, 11 % fewer instructions; see `docs/search-benchmarks.md`).
 struct Shared<'a> {
     surface: &'a Surface,
     positions: &'a [Vec3],
