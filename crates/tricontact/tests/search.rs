@@ -55,19 +55,7 @@ proptest! {
                 same(bvh.closest(&surface, &q, max), brute_force_closest(&surface, &nodes, &q, max))?;
             }
             let within = bvh.within(&surface, &q, 0.1);
-            let mut reference: Vec<Hit> = (0..surface.len() as u32)
-                .filter(|&f| {
-                    let [a, b, c] = surface.corners(f, &nodes);
-                    tricontact::Facet::new(a, b, c).is_ok()
-                })
-                .filter(|&f| {
-                    let [a, b, c] = surface.corners(f, &nodes);
-                    distance_squared_to_triangle(&a, &b, &c, &q.point) <= 0.1 * 0.1
-                })
-                .filter_map(|f| measure(&surface, &nodes, f, &q))
-                .collect();
-            tricontact::search::sort_hits(&mut reference);
-            prop_assert_eq!(within, reference);
+            prop_assert_eq!(within, brute_force_within(&surface, &nodes, &q, 0.1));
         }
     }
 }
@@ -743,23 +731,39 @@ fn shuffled_batches_give_the_same_answers() {
     }
 }
 
-/// The answers of the incremental search at `moved` (queries `qs`) against the refitted tree's,
-/// answer for answer; returns the search's statistics.
+/// The answers of the incremental search at `moved` (queries `qs`, within `max`) against those of
+/// a tree built there, answer for answer; returns the search's statistics and the answers.
 fn incremental_matches_tree(
     lists: &Neighbourhoods,
     surface: &Surface,
     moved: &[Vec3],
     qs: &[Query],
-) -> tricontact::search::IncrementalStats {
+    max: f64,
+) -> (tricontact::search::IncrementalStats, Vec<Option<Hit>>) {
     let mut tree = Bvh::build(surface, moved, 0.0).unwrap();
-    let expected = tree.closest_all(surface, qs, f64::INFINITY);
+    let expected = tree.closest_all(surface, qs, max);
     let (hits, stats) = lists
-        .closest_all(&mut tree, surface, moved, qs, f64::INFINITY)
+        .closest_all(&mut tree, surface, moved, qs, max)
         .unwrap();
     for (i, (a, b)) in hits.iter().zip(&expected).enumerate() {
         assert_eq!(a, b, "query {i}");
     }
-    stats
+    (stats, expected)
+}
+
+/// Every valid facet within `radius` of `q` at `positions`, by brute force, in the tree's order
+/// ([`tricontact::search::sort_hits`]): the reference for `Bvh::within`.
+fn brute_force_within(surface: &Surface, positions: &[Vec3], q: &Query, radius: f64) -> Vec<Hit> {
+    let mut near: Vec<Hit> = (0..surface.len() as u32)
+        .filter(|&f| {
+            let [a, b, c] = surface.corners(f, positions);
+            tricontact::Facet::new(a, b, c).is_ok()
+                && distance_squared_to_triangle(&a, &b, &c, &q.point) <= radius * radius
+        })
+        .filter_map(|f| measure(surface, positions, f, q))
+        .collect();
+    tricontact::search::sort_hits(&mut near);
+    near
 }
 
 /// A torus (`around` × `tube` cells, radii `major`, `minor`), query points scattered near its
@@ -825,7 +829,7 @@ fn rigid_motions_are_certified_by_the_first_listed_facet() {
         (&rotated, &queries),
         (&translated, &carried),
     ] {
-        let stats = incremental_matches_tree(&lists, &surface, moved, qs);
+        let (stats, _) = incremental_matches_tree(&lists, &surface, moved, qs, f64::INFINITY);
         assert_eq!(stats.fallbacks, 0, "{stats:?}");
         assert!(
             stats.measured * 100 < 130 * stats.queries,
@@ -860,7 +864,7 @@ fn jittered_nodes_keep_the_incremental_search_exact() {
             .iter()
             .map(|q| Query::point(q.point + Vec3::new(jitter(), jitter(), jitter())))
             .collect();
-        let stats = incremental_matches_tree(&lists, &surface, &moved, &moving);
+        let (stats, _) = incremental_matches_tree(&lists, &surface, &moved, &moving, f64::INFINITY);
         if amplitude < 0.05 {
             assert!(stats.fallbacks * 20 < stats.queries, "{stats:?}");
         }
@@ -883,7 +887,7 @@ fn non_finite_positions_and_queries_in_the_incremental_search() {
     let mut moved = nodes.clone();
     moved[7].y = f64::NAN;
     assert!(lists.motion(&moved).is_nan());
-    let stats = incremental_matches_tree(&lists, &surface, &moved, &queries);
+    let (stats, _) = incremental_matches_tree(&lists, &surface, &moved, &queries, f64::INFINITY);
     assert!(stats.fallbacks > 0, "{stats:?}");
     let mut odd = queries.clone();
     odd[3].point.x = f64::NAN;
@@ -928,7 +932,7 @@ fn a_query_moving_onto_a_facet_listed_without_direction_finds_it() {
     // The scene is as described: the query is now on `f`.
     let now = bvh.closest(&surface, &after[0], f64::INFINITY).unwrap();
     assert!(now.facet == 1 && now.closest.distance < 1e-15, "{now:?}");
-    incremental_matches_tree(&lists, &surface, &nodes, &after);
+    incremental_matches_tree(&lists, &surface, &nodes, &after, f64::INFINITY);
 }
 
 /// A bumpy grid (`2·6²` facets of size `1/6`, heights random within a third of an element, so
@@ -1011,14 +1015,7 @@ fn bumpy_grid_at_every_scale(seed: u64, size: f64, offset: f64) {
         } else {
             f64::INFINITY
         };
-        let mut tree = Bvh::build(&surface, &moved, 0.0).unwrap();
-        let expected = tree.closest_all(&surface, &qs, max);
-        let (hits, _) = lists
-            .closest_all(&mut tree, &surface, &moved, &qs, max)
-            .unwrap();
-        for (i, (a, b)) in hits.iter().zip(&expected).enumerate() {
-            assert_eq!(a, b, "round {round}, query {i}");
-        }
+        let (_, expected) = incremental_matches_tree(&lists, &surface, &moved, &qs, max);
         // The tree refitted from the initial positions, against brute force: the closest facet,
         // and every facet within the search distance (or a tenth of the grid).
         let mut refitted = bvh.clone();
@@ -1028,16 +1025,7 @@ fn bumpy_grid_at_every_scale(seed: u64, size: f64, offset: f64) {
             let reference = brute_force_closest(&surface, &moved, q, max);
             same(*hit, reference).unwrap();
             same(refitted.closest(&surface, q, max), reference).unwrap();
-            let mut near: Vec<Hit> = (0..surface.len() as u32)
-                .filter(|&f| !q.excludes(&surface, f))
-                .filter(|&f| {
-                    let [a, b, c] = surface.corners(f, &moved);
-                    tricontact::Facet::new(a, b, c).is_ok()
-                        && distance_squared_to_triangle(&a, &b, &c, &q.point) <= radius * radius
-                })
-                .filter_map(|f| measure(&surface, &moved, f, q))
-                .collect();
-            tricontact::search::sort_hits(&mut near);
+            let near = brute_force_within(&surface, &moved, q, radius);
             assert_eq!(refitted.within(&surface, q, radius), near, "round {round}");
         }
     }
