@@ -1,7 +1,8 @@
 //! The incremental search's bounds for a vector of queries at once (one per lane: eight with
 //! AVX-512, four otherwise): which of the facets listed after a
 //! query's first are excluded by the Lipschitz bound `d₀(f) − m` or by the first-order bound
-//! `d₀(f) + n̂(f)·(p − p₀ − T) − s − slack`, and whether the rest of its list and the unlisted
+//! `d₀(f) + n̂(f)·(p − p₀ − T) − r − slack` (`r` the rise of the facet's nodes along `n̂`), and
+//! whether the rest of its list and the unlisted
 //! facets are excluded (the formulas and their margins: [`crate::search::incremental`]).
 //!
 //! [`Bounds`] is the scalar form, one query at a time (the walks beyond a query's record, and the
@@ -21,13 +22,14 @@ pub(crate) const MARGIN: f64 = 1e-9;
 pub(crate) const NEAR: usize = 2;
 
 /// What a screen needs of a listed facet: its distance then, its direction then (decoded), and
-/// how it moved (the translation `T` and the spread `s`).
+/// how it moved (the translation `T` and the rise `r` of its nodes along the direction, widened
+/// for the direction's error).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Listed {
     pub(crate) distance: f64,
     pub(crate) direction: Vec3,
     pub(crate) translation: Vec3,
-    pub(crate) spread: f64,
+    pub(crate) rise: f64,
 }
 
 /// The values of [`PAIRS`] queries, lane by lane.
@@ -42,7 +44,7 @@ pub(crate) struct Stage {
     distance: [[f64; PAIRS]; NEAR],
     direction: [[[f64; PAIRS]; 3]; NEAR],
     translation: [[[f64; PAIRS]; 3]; NEAR],
-    spread: [[f64; PAIRS]; NEAR],
+    rise: [[f64; PAIRS]; NEAR],
 }
 
 /// The outcome of a screen, as lane masks: per screened facet, the lanes that must measure it; the
@@ -98,7 +100,7 @@ impl Bounds {
     pub(crate) fn excludes(&self, l: &Listed, b: f64) -> bool {
         let v = self.dp - l.translation;
         let slack = self.tol + DIRECTION_ERROR * (v.x.abs() + v.y.abs() + v.z.abs());
-        l.distance + l.direction.dot(&v) - l.spread - slack > b
+        l.distance + l.direction.dot(&v) - l.rise - slack > b
     }
 
     /// `true` when the facets not listed are farther than `b`, or than the search distance, now
@@ -128,7 +130,7 @@ impl Stage {
         self.after[k] = after;
         for (j, l) in listed.iter().enumerate() {
             self.distance[j][k] = l.distance;
-            self.spread[j][k] = l.spread;
+            self.rise[j][k] = l.rise;
             for d in 0..3 {
                 self.direction[j][d][k] = l.direction[d];
                 self.translation[j][d][k] = l.translation[d];
@@ -158,7 +160,7 @@ impl Stage {
             let l1 = v[0].abs() + v[1].abs() + v[2].abs();
             let slack = tol + V::splat(DIRECTION_ERROR) * l1;
             let along = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-            let lower = d0 + along - w(&self.spread[j]) - slack;
+            let lower = d0 + along - w(&self.rise[j]) - slack;
             *need = (!(beyond(d0) | lower.simd_gt(b))).to_bitmask();
         }
         // Facets not listed are farther than `reach − m` now.
@@ -201,7 +203,7 @@ mod tests {
                     distance: first + v(0.1).x.abs(),
                     direction: v(2.0).normalize(),
                     translation: v(0.05),
-                    spread: v(0.02).x.abs(),
+                    rise: v(0.02).x.abs(),
                 });
                 let reach = if k == 7 { f64::INFINITY } else { first + 0.15 };
                 let after = if k == 6 {
