@@ -4,7 +4,7 @@
 //! A full search ([`Neighbourhoods::new`]) records, for each query, its point `p₀`, its closest
 //! distance `d₀`, and every facet within the reach `ρ = d₀ + skin` with its distance `d₀(f)` then
 //! (sorted by it; stored in `f32`, rounded down) and the direction `n̂(f)` from its closest point
-//! to `p₀` (three bytes, `search::direction`), together with the surface's node positions
+//! to `p₀` (four bytes, `search::direction`), together with the surface's node positions
 //! `x₀`. One traversal per query finds them: a box is pruned when it is farther than the best
 //! distance so far plus the skin (queries in parallel chunks, each hinted with the previous one's
 //! answer). A query's point, reach, first three listed facets and the distance of the fourth fill
@@ -34,12 +34,13 @@
 //! is at least zero), which keeps small the vectors that the decoded direction multiplies when the
 //! surface moves smoothly (translating, rotating, deforming a little): the middle term is then
 //! nearly the change the measured first facet went through, and close competitors are excluded
-//! without measuring them (on the benchmark's torus after a motion of 0.01 element sizes: 1.10
-//! facets measured per query at 10⁶ facets, against 1.15 with the largest relative node motion
-//! `maxₙ |mₙ − T|` in place of the rise along `n̂`, and 2.0 with the Lipschitz bound alone). The
-//! stored `d₀(f)` is rounded down, `n̂` decoded within `DIRECTION_ERROR` (7·10⁻³), which widens
-//! the bound by that error times `|p − p₀ − T|₁ + maxₙ |mₙ − T|₁`, and a margin of 10⁻⁹ of the
-//! coordinates' magnitude absorbs rounding in all these bounds. Where `p₀` was within 10⁻⁶ of that
+//! without measuring them (on the benchmark's torus after a motion of 0.01 element sizes: 1.07
+//! facets measured per query at 10⁶ facets, against 1.10 with directions to 7·10⁻³, 1.15 with
+//! the largest relative node motion `maxₙ |mₙ − T|` in place of the rise along `n̂`, and 2.0
+//! with the Lipschitz bound alone). The stored `d₀(f)` is rounded down, `n̂` decoded within
+//! `DIRECTION_ERROR` (1.2·10⁻³), which widens the bound by that error times
+//! `|p − p₀ − T|₁ + maxₙ |mₙ − T|₁`, and a margin of 10⁻⁹ of the coordinates' magnitude absorbs
+//! rounding in all these bounds. Where `p₀` was within 10⁻⁶ of that
 //! magnitude of a listed facet, its direction is not reliable (rounding) and is not stored: the
 //! entry keeps the distance `0` and no direction, which no bound can exclude, so that facet is
 //! measured. (Zero is a subgradient only where the distance is zero: a query that was `10⁻⁷` from
@@ -181,6 +182,11 @@ struct Head {
     /// The rest of the list is `entries[start..]` up to the next head's `start`.
     start: u32,
 }
+
+const _: () = assert!(
+    std::mem::size_of::<Head>() == 64 && std::mem::size_of::<Entry>() == 12,
+    "a record is one cache line, an entry twelve bytes"
+);
 
 /// One chunk's lists (see [`Neighbourhoods::chunk_lists`]).
 struct ChunkLists {

@@ -10,7 +10,7 @@
 //! * [`packet`]: coherent batches, a packet of consecutive queries sharing one traversal;
 //! * [`incremental`]: answers again after a small motion from per-query neighbourhood lists, with
 //!   a certificate from the motion, and tree fallback; `screen`: its bounds for a vector of
-//!   queries at once; `direction`: unit vectors in three bytes.
+//!   queries at once; `direction`: unit vectors in four bytes.
 //!
 //! The search uses the kernel's closest-point query, so each answer says whether the node faces the
 //! interior, an edge or a vertex of its facet.
