@@ -68,13 +68,14 @@
 //! and the answers' lines are asked for with the intent to write them (`prefetchw`) four groups
 //! ahead.
 //!
-//! On the 10⁶-facet torus after a motion of 0.01 element sizes, 17.8 % of the queries need more
-//! than their first facet (6.7 % walk; 0.15 facets put aside per query), and a call takes 38–40 ns
-//! a query on one core (AMD EPYC, Zen 4), of which 20.7 remain with the screen and all that
-//! follows removed: the screen costs about 8.5 ns, the walks about 5, the facets put aside the
-//! rest. The measurements behind each choice above, and the alternatives measured and not kept
-//! (among them bounds for a group of queries or for a whole list that read no motion per listed
-//! facet, and the record's listed facets measured instead of screened), are in
+//! On the 10⁶-facet torus after a motion of 0.01 element sizes, 11.9 % of the queries need more
+//! than their first facet (0.07 facets put aside per query; 6.7 % walk, 85 % of them through
+//! exactly three further entries: six facets about as far, as around a node of this mesh), and a
+//! call takes 37.5–38 ns a query on one core (AMD EPYC, Zen 4): 28.5 with every query taken as
+//! certified after its screen, 33 with no query walking (timing-only variants); the screen costs
+//! about 8.5 ns. The measurements behind each choice above, and the alternatives measured and not
+//! kept (among them bounds for a group of queries or for a whole list that read no motion per
+//! listed facet, and the record's listed facets measured instead of screened), are in
 //! `docs/search-benchmarks.md` ("The incremental search, as measured").
 //!
 //! A query whose answer is not certified falls back to the tree, which
