@@ -40,11 +40,11 @@
 //! with the Lipschitz bound alone). The stored `d₀(f)` is rounded down, `n̂` decoded within
 //! `DIRECTION_ERROR` (1.2·10⁻³), which widens the bound by that error times
 //! `|p − p₀ − T|₁ + maxₙ |mₙ − T|₁`, and a margin of 10⁻⁹ of the coordinates' magnitude absorbs
-//! rounding in all these bounds. Where `p₀` was within 10⁻⁶ of that
-//! magnitude of a listed facet, its direction is not reliable (rounding) and is not stored: the
-//! entry keeps the distance `0` and no direction, which no bound can exclude, so that facet is
-//! measured. (Zero is a subgradient only where the distance is zero: a query that was `10⁻⁷` from
-//! a facet and moves onto it must find it, a test.)
+//! rounding in all these bounds. Where `p₀` was within 10⁻⁶ of that magnitude of a listed facet,
+//! its direction is not reliable (rounding) and is not stored: the entry keeps the distance `0`
+//! and no direction, which no bound can exclude, so that facet is measured. (Zero is a
+//! subgradient only where the distance is zero: a query that was `10⁻⁷` from a facet and moves
+//! onto it must find it, a test.)
 //!
 //! Candidates are measured with the kernel the tree uses ([`crate::distance_squared_to_triangle`],
 //! bit for bit) and compared in the same total order (distance, then facet index), so the answer
@@ -1367,8 +1367,8 @@ mod tests {
             );
         }
         // Only the motion along `n̂` counts, so even nodes moving each on its own rarely rise
-        // along it as far as the Lipschitz bound assumes. (The bound with the spread
-        // `maxₙ |mₙ − T|₁` in place of the rise did better in 94 %, 65 % and 31 % of these cases.)
+        // along it as far as the Lipschitz bound assumes. (With the spread `maxₙ |mₙ − T|₁` in
+        // place of the rise, the bound was the sharper in only 94 %, 65 % and 31 % of these cases.)
         let counts = format!("sharper in {sharper:?} of {cases:?}");
         assert!(
             sharper.iter().zip(&cases).all(|(s, c)| s * 100 > 99 * c),
