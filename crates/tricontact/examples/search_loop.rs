@@ -21,10 +21,11 @@
 //! The scene is `search_bench`'s: a torus of `nu × nu/2` quads split in two (316 gives 99 856
 //! facets, 1000 gives 10⁶), one query per facet within ±2 element sizes of the surface, in facet
 //! order. `closest` times [`Bvh::closest_all_into`], `random` the same on the queries shuffled
-//! (`search_bench`'s random order); `incremental` makes neighbourhood lists
-//! (skin half an element), deforms the torus by 0.01 element sizes as `search_bench` does and
-//! times [`Neighbourhoods::closest_all_into`]. `walk` times, on the same motion, the alternative
-//! the incremental search does not take: from each query's facet before the motion, a walk to
+//! (`search_bench`'s random order); `incremental` makes neighbourhood lists (skin half an
+//! element), deforms the torus by 0.01 element sizes as `search_bench` does, times
+//! [`Neighbourhoods::closest_all_into`] and prints the facets it measured per query. `walk` times,
+//! on the same motion, the alternative the incremental search does not take: from each query's
+//! facet before the motion, a walk to
 //! nearer facets sharing a node ([`Surface::neighbours`], the scalar kernel on the facet and all its
 //! neighbours, until none is nearer), and counts the facets it measures and the answers that
 //! differ from the tree's (a walk certifies none of them). `build` times [`Bvh::build`] and
@@ -34,7 +35,7 @@
 //!
 //! ```text
 //! closest, 99856 facets: 313.9 ns per query (best of 15 calls, one core; median 359.8)
-//! incremental, 1000000 facets: 38.1 ns per query (best of 20 calls, one core; median 39.2); 1.101 facets measured per query
+//! incremental, 1000000 facets: 39.3 ns per query (best of 20 calls, one core; median 56.4); 1.071 facets measured per query
 //! build, 1000000 facets: 223.9 ns per facet (best of 4 calls, one core; median 239.4)
 //! refit, 1000000 facets: 45.4 ns per facet (best of 6 calls, one core; median 52.0)
 //! walk, 1000000 facets: 218.1 ns per query (best of 5 calls, one core; median 231.1); 13.16 facets measured per query, 0 answers differ from the tree
