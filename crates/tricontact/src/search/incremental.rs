@@ -71,7 +71,7 @@
 //! On the 10⁶-facet torus after a motion of 0.01 element sizes, 11.9 % of the queries need more
 //! than their first facet (0.07 facets put aside per query; 6.7 % walk, 85 % of them through
 //! exactly three further entries: six facets about as far, as around a node of this mesh), and a
-//! call takes 37.5–38 ns a query on one core (AMD EPYC, Zen 4): 28.5 with every query taken as
+//! call takes 37–39 ns a query on one core (AMD EPYC, Zen 4): 28.5 with every query taken as
 //! certified after its screen, 33 with no query walking (timing-only variants); the screen costs
 //! about 8.5 ns. The measurements behind each choice above, and the alternatives measured and not
 //! kept (among them bounds for a group of queries or for a whole list that read no motion per
