@@ -934,7 +934,8 @@ fn a_query_moving_onto_a_facet_listed_without_direction_finds_it() {
     // The scene is as described: the query is now on `f`.
     let now = bvh.closest(&surface, &after[0], f64::INFINITY).unwrap();
     assert!(now.facet == 1 && now.closest.distance < 1e-15, "{now:?}");
-    incremental_matches_tree(&lists, &surface, &nodes, &after, f64::INFINITY);
+    let (stats, _) = incremental_matches_tree(&lists, &surface, &nodes, &after, f64::INFINITY);
+    assert_eq!(stats.queries, 1);
 }
 
 /// A bumpy grid (`2·6²` facets of size `1/6`, heights random within a third of an element, so

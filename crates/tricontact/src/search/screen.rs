@@ -1,9 +1,8 @@
 //! The incremental search's bounds for a vector of queries at once (one per lane: eight with
-//! AVX-512, four otherwise): which of the facets listed after a
-//! query's first are excluded by the Lipschitz bound `d₀(f) − m` or by the first-order bound
-//! `d₀(f) + n̂(f)·(p − p₀ − T) − r − slack` (`r` the rise of the facet's nodes along `n̂`), and
-//! whether the rest of its list and the unlisted
-//! facets are excluded (the formulas and their margins: [`crate::search::incremental`]).
+//! AVX-512, four otherwise): which of the facets listed after a query's first are excluded by the
+//! Lipschitz bound `d₀(f) − m` or by the first-order bound `d₀(f) + n̂(f)·(p − p₀ − T) − r − slack`
+//! (`r` the rise of the facet's nodes along `n̂`), and whether the rest of its list and the
+//! unlisted facets are excluded (the formulas and their margins: [`crate::search::incremental`]).
 //!
 //! [`Bounds`] is the scalar form, one query at a time (the walks beyond a query's record, and the
 //! queries answered one facet at a time). For the lanes' queries at once, their values are put
