@@ -27,8 +27,9 @@
 //! on the same motion, the alternative the incremental search does not take: from each query's
 //! facet before the motion, a walk to nearer facets sharing a node ([`Surface::neighbours`], the
 //! scalar kernel on the facet and all its neighbours, until none is nearer), and counts the facets
-//! it measures and the answers that differ from the tree's (a walk certifies none of them). `build` times [`Bvh::build`] and
-//! `refit` [`Bvh::update`] (the torus and its deformed copy in turn), per facet. Expected output
+//! it measures and the answers that differ from the tree's (a walk certifies none of them).
+//! `build` times [`Bvh::build`] and `refit` [`Bvh::update`] (the torus and its deformed copy in
+//! turn), per facet. Expected output
 //! (the time varies with the machine; these lines are from an AMD EPYC Zen 4, with AVX-512; an
 //! AVX2 machine, Zen 3, read 471.0 ns for the `closest` line):
 //!

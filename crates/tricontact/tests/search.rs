@@ -751,8 +751,9 @@ fn incremental_matches_tree(
     (stats, expected)
 }
 
-/// Every valid facet within `radius` of `q` at `positions`, by brute force, in the tree's order
-/// ([`tricontact::search::sort_hits`]): the reference for `Bvh::within`.
+/// Every valid facet within `radius` of `q` at `positions` that `q` does not exclude ([`measure`]
+/// leaves those out), by brute force, in the tree's order ([`tricontact::search::sort_hits`]): the
+/// reference for `Bvh::within`.
 fn brute_force_within(surface: &Surface, positions: &[Vec3], q: &Query, radius: f64) -> Vec<Hit> {
     let mut near: Vec<Hit> = (0..surface.len() as u32)
         .filter(|&f| {
