@@ -4,8 +4,9 @@
 //! many short interleaved runs instead (this machine's speed drifts by tens of per cent over
 //! minutes).
 //! This program times one path on one core (or on `threads`, the optional fourth argument, except
-//! `walk`, which is sequential) and prints the best time per query over `reps` calls, and the
-//! median. The bench's figures are means of batches of calls, nearer the median than the best.
+//! `walk` and `stream`, which are sequential) and prints the best time per query over `reps` calls,
+//! and the median. The bench's figures are means of batches of calls, nearer the median than the
+//! best.
 //! On this machine, in three runs each of `incremental 316 60` and `closest 316 60` taken in turn,
 //! the incremental search read 37.9–52.1 ns per query at best and 43.5–57.6 at the median, the
 //! full query 311–313 and 353–394: the medians' ratio was 6.1–8.8, the bests' 6.0–8.2. The
@@ -31,8 +32,8 @@
 //! it measures and the answers that differ from the tree's (a walk certifies none of them).
 //! `build` times [`Bvh::build`] and `refit` [`Bvh::update`] (the torus and its deformed copy in
 //! turn), per facet. `stream` times the incremental search's three largest streams and nothing
-//! else (sequential): per query, a 64-byte record and the query read, an answer written (the
-//! floor its memory traffic sets). Expected output
+//! else (sequential, like `walk`): per query, a 64-byte record and the query read, an answer
+//! written (the floor its memory traffic sets). Expected output
 //! (the time varies with the machine; these lines are from an AMD EPYC Zen 4, with AVX-512; an
 //! AVX2 machine, Zen 3, read 471.0 ns for the `closest` line):
 //!
@@ -90,7 +91,7 @@ fn main() -> ExitCode {
         .num_threads(threads)
         .build()
         .expect("a thread pool");
-    let cores = if threads == 1 {
+    let cores = if threads == 1 || mode == "stream" {
         "one core".to_string()
     } else {
         format!("{threads} threads")
