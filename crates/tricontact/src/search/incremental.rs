@@ -25,21 +25,25 @@
 //! `h(n) = max_{y∈K} n·y` is the support of `K` in the direction `n`; for `n = n̂(f)`, the
 //! direction from the facet's closest point to `p₀` then, this is an equality at `p₀`:
 //! `d₀(f) = n̂·p₀ − h₀(n̂)`. A triangle's support is that of its corners, so after its nodes moved
-//! by `mₙ = xₙ − x₀ₙ` it rose by at most `maxₙ∈f n̂·mₙ`; hence, for any `T` (it cancels),
+//! by `mₙ = xₙ − x₀ₙ` it rose by at most `r(f) = maxₙ∈f n̂·mₙ`, the rise; hence
 //!
-//! `d(f) ≥ d₀(f) + n̂(f)·(p − p₀ − T) − maxₙ∈f n̂(f)·(mₙ − T)`.
+//! `d(f) ≥ d₀(f) − r(f) + n̂(f)·(p − p₀)`.
 //!
 //! Only the motion along `n̂` counts: a facet sliding, turning or stretching in its own plane
-//! loosens nothing. The search takes for `T` the motion of the facet's own first node (so the max
-//! is at least zero), which keeps small the vectors that the decoded direction multiplies when the
-//! surface moves smoothly (translating, rotating, deforming a little): the middle term is then
-//! nearly the change the measured first facet went through, and close competitors are excluded
-//! without measuring them (on the benchmark's torus after a motion of 0.01 element sizes: 1.07
-//! facets measured per query at 10⁶ facets, against 1.10 with directions to 7·10⁻³, 1.15 with
-//! the largest relative node motion `maxₙ |mₙ − T|` in place of the rise along `n̂`, and 2.0
-//! with the Lipschitz bound alone). The stored `d₀(f)` is rounded down, `n̂` decoded within
-//! `DIRECTION_ERROR` (1.2·10⁻³), which widens the bound by that error times
-//! `|p − p₀ − T|₁ + maxₙ |mₙ − T|₁`, and a margin of 10⁻⁹ of the coordinates' magnitude absorbs
+//! loosens nothing, and when the surface moves smoothly the rise is nearly the change the measured
+//! first facet went through, so close competitors are excluded without measuring them (on the
+//! benchmark's torus after a motion of 0.01 element sizes: 1.07 facets measured per query at 10⁶
+//! facets, against 1.10 with directions to 7·10⁻³, 1.15 with the largest node motion relative to
+//! the facet's first node in place of the rise along `n̂`, and 2.0 with the Lipschitz bound
+//! alone). The stored `d₀(f)` is
+//! rounded down and `n̂` decoded within `ε = DIRECTION_ERROR` (1.2·10⁻³): the decoded direction
+//! changes `n̂·(p − p₀)` by at most `ε |p − p₀|` and the rise by at most `ε maxₙ |mₙ| ≤ ε δ`, so
+//! the bound is widened by `ε m`, one number for all of a query's facets, and a listed facet's
+//! bound needs of its nodes only the three products `n̂·mₙ`. (The bound is the same for any
+//! translation `T` subtracted from `p − p₀` and from every `mₙ`; an earlier form took the motion of
+//! the facet's first node and widened by `ε (|p − p₀ − T|₁ + maxₙ |mₙ − T|₁)` per facet, sharper
+//! only where the query points move with the surface, and slower: see
+//! `docs/search-benchmarks.md`.) A margin of 10⁻⁹ of the coordinates' magnitude absorbs
 //! rounding in all these bounds. Where `p₀` was within 10⁻⁶ of that magnitude of a listed facet,
 //! its direction is not reliable (rounding) and is not stored: the entry keeps the distance `0`
 //! and no direction, which no bound can exclude, so that facet is measured. (Zero is a
@@ -113,7 +117,7 @@ use crate::closest::{ClosestPoint, closest_point_and_distance_squared};
 use crate::facet::{DEGENERACY_TOLERANCE, Facet};
 use crate::linalg::Vec3;
 use crate::search::bvh::{Bvh, Update};
-use crate::search::direction::{DIRECTION_ERROR, Direction};
+use crate::search::direction::Direction;
 use crate::search::lanes::{self, PAIRS, Pairs, V};
 use crate::search::layout::index;
 use crate::search::node::{Child, as_leaf, round_down};
@@ -940,26 +944,20 @@ impl Neighbourhoods {
     }
 }
 
-/// What the bounds need of the listed facet whose entry is `e` and whose nodes `(a, b, c)` moved
-/// by `motions` since the lists were made: its distance and direction `n̂` then, `T` the motion
-/// of its first node, and the rise `maxₙ n̂·(mₙ − T)` of its nodes along `n̂` (at least zero, the
-/// first node's), widened by the direction's error times `maxₙ |mₙ − T|₁` (see the module
-/// documentation, "Certificate").
+/// What the bounds need of the listed facet whose entry is `e` and whose nodes moved by `m` since
+/// the lists were made: its distance and (decoded) direction `n̂` then, and the rise
+/// `maxₙ n̂·mₙ` of its nodes along `n̂` (see the module documentation, "Certificate").
 #[inline(always)]
-fn listed_of(e: &Entry, [a, b, c]: [Vec3; 3]) -> Listed {
+fn listed_of(e: &Entry, m: [Vec3; 3]) -> Listed {
     let direction = e.direction.decode();
-    let (b, c) = (b - a, c - a);
-    let (along_b, along_c) = (direction.dot(&b), direction.dot(&c));
-    let along = if along_b > along_c { along_b } else { along_c };
-    let (size_b, size_c) = (l1(&b), l1(&c));
-    let size = if size_b > size_c { size_b } else { size_c };
+    let [ra, rb, rc] = m.map(|m| direction.dot(&m));
+    let r = if ra > rb { ra } else { rb };
     // A NaN here may be dropped: a motion that is not finite makes `δ` not finite, and then no
     // query is certified (their unlisted facets are not excluded).
     Listed {
         distance: f64::from(e.distance),
         direction,
-        translation: a,
-        rise: if along > 0.0 { along } else { 0.0 } + DIRECTION_ERROR * size,
+        rise: if r > rc { r } else { rc },
     }
 }
 
@@ -1158,12 +1156,6 @@ fn prefetch_for_write<T>(x: &[T]) {
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = x;
-}
-
-/// `|v|₁ = |v_x| + |v_y| + |v_z| ≥ |v|`.
-#[inline(always)]
-fn l1(v: &Vec3) -> f64 {
-    v.x.abs() + v.y.abs() + v.z.abs()
 }
 
 /// A node motion below which the facet `(a, b, c)` cannot become degenerate: moving each node by at

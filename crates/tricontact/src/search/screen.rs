@@ -1,8 +1,10 @@
 //! The incremental search's bounds for a vector of queries at once (one per lane: eight with
 //! AVX-512, four otherwise): which of the facets listed after a query's first are excluded by the
-//! Lipschitz bound `d₀(f) − m` or by the first-order bound `d₀(f) + n̂(f)·(p − p₀ − T) − r − slack`
-//! (`r` the rise of the facet's nodes along `n̂`), and whether the rest of its list and the
-//! unlisted facets are excluded (the formulas and their margins: [`crate::search::incremental`]).
+//! first-order bound `d₀(f) − r + n̂(f)·(p − p₀) − slack` (`r` the rise of the facet's nodes along
+//! `n̂`, `slack = tol + ε m` the same for all of a query's facets), and whether the rest of its
+//! list (the Lipschitz bound `d₀(f) − m`) and the unlisted facets are excluded (the formulas and
+//! their margins: [`crate::search::incremental`]). The first-order bound is below the Lipschitz
+//! bound by at most `2 ε m` (`|n̂| ≤ 1 + ε`), so the screened facets are tested by it alone.
 //!
 //! [`Bounds`] is the scalar form, one query at a time (the walks beyond a query's record, and the
 //! queries answered one facet at a time). For the lanes' queries at once, their values are put
@@ -17,17 +19,16 @@ use crate::search::lanes::{PAIRS, V, load};
 /// Relative margin of the certificate, on the magnitude of the coordinates and distances.
 pub(crate) const MARGIN: f64 = 1e-9;
 
-/// Listed facets after the first that are screened with both bounds.
+/// Listed facets after the first that are screened by the first-order bound.
 pub(crate) const NEAR: usize = 2;
 
 /// What a screen needs of a listed facet: its distance then, its direction then (decoded), and
-/// how it moved (the translation `T` and the rise `r` of its nodes along the direction, widened
-/// for the direction's error).
+/// the rise `r = maxₙ n̂·mₙ` of its nodes along that direction since (negative when the facet
+/// moved away along `n̂`).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Listed {
     pub(crate) distance: f64,
     pub(crate) direction: Vec3,
-    pub(crate) translation: Vec3,
     pub(crate) rise: f64,
 }
 
@@ -40,10 +41,9 @@ pub(crate) struct Stage {
     reach: [f64; PAIRS],
     /// The distance then of the facet listed after the screened ones.
     after: [f64; PAIRS],
-    distance: [[f64; PAIRS]; NEAR],
+    /// The screened facets' `d₀(f) − r`.
+    level: [[f64; PAIRS]; NEAR],
     direction: [[[f64; PAIRS]; 3]; NEAR],
-    translation: [[[f64; PAIRS]; 3]; NEAR],
-    rise: [[f64; PAIRS]; NEAR],
 }
 
 /// The outcome of a screen, as lane masks: per screened facet, the lanes that must measure it; the
@@ -63,12 +63,13 @@ pub(crate) struct Limits {
 }
 
 /// One query's bounds: its motion `dp = p − p₀`, `m = |dp| + δ` of the Lipschitz bound, the margin
-/// `tol` on distances, and its reach `ρ`.
+/// `tol` on distances, the first-order bound's `slack = tol + ε m`, and its reach `ρ`.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Bounds {
     pub(crate) dp: Vec3,
     m: f64,
     tol: f64,
+    slack: f64,
     reach: f64,
 }
 
@@ -79,10 +80,13 @@ impl Bounds {
     pub(crate) fn new(p: &Vec3, p0: &Vec3, reach: f64, delta: f64) -> Self {
         let dp = p - p0;
         let finite = if reach.is_finite() { reach } else { 0.0 };
+        let m = dp.norm() + delta;
+        let tol = MARGIN * (p.amax() + p0.amax() + finite);
         Self {
             dp,
-            m: dp.norm() + delta,
-            tol: MARGIN * (p.amax() + p0.amax() + finite),
+            m,
+            tol,
+            slack: tol + DIRECTION_ERROR * m,
             reach,
         }
     }
@@ -97,9 +101,7 @@ impl Bounds {
     /// `true` when the listed facet `l` is farther than `b` now by the first-order bound.
     #[inline(always)]
     pub(crate) fn excludes(&self, l: &Listed, b: f64) -> bool {
-        let v = self.dp - l.translation;
-        let slack = self.tol + DIRECTION_ERROR * (v.x.abs() + v.y.abs() + v.z.abs());
-        l.distance + l.direction.dot(&v) - l.rise - slack > b
+        (l.distance - l.rise) + l.direction.dot(&self.dp) - self.slack > b
     }
 
     /// `true` when the facets not listed are farther than `b`, or than the search distance, now
@@ -128,11 +130,9 @@ impl Stage {
         self.reach[k] = reach;
         self.after[k] = after;
         for (j, l) in listed.iter().enumerate() {
-            self.distance[j][k] = l.distance;
-            self.rise[j][k] = l.rise;
+            self.level[j][k] = l.distance - l.rise;
             for d in 0..3 {
                 self.direction[j][d][k] = l.direction[d];
-                self.translation[j][d][k] = l.translation[d];
             }
         }
     }
@@ -150,24 +150,20 @@ impl Stage {
         let reach = w(&self.reach);
         let finite = reach.is_finite().select(reach, zero);
         let tol = V::splat(MARGIN) * (amax(&p) + amax(&p0) + finite);
-        let beyond = |d0: V| (d0 - m).simd_gt(b + tol);
+        let slack = tol + V::splat(DIRECTION_ERROR) * m;
         let mut need = [0u32; NEAR];
         for (j, need) in need.iter_mut().enumerate() {
-            let d0 = w(&self.distance[j]);
-            let (t, u) = (load(&self.translation[j]), load(&self.direction[j]));
-            let v = [dp[0] - t[0], dp[1] - t[1], dp[2] - t[2]];
-            let l1 = v[0].abs() + v[1].abs() + v[2].abs();
-            let slack = tol + V::splat(DIRECTION_ERROR) * l1;
-            let along = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-            let lower = d0 + along - w(&self.rise[j]) - slack;
-            *need = (!(beyond(d0) | lower.simd_gt(b))).to_bitmask();
+            let u = load(&self.direction[j]);
+            let along = u[0] * dp[0] + u[1] * dp[1] + u[2] * dp[2];
+            let lower = w(&self.level[j]) + along - slack;
+            *need = (!lower.simd_gt(b)).to_bitmask();
         }
         // Facets not listed are farther than `reach − m` now.
         let limit = reach - m - tol;
         let unlisted = b.simd_lt(limit) | V::splat(limits.max_distance).simd_lt(limit);
         Outcome {
             need,
-            later: beyond(w(&self.after)).to_bitmask(),
+            later: (w(&self.after) - m).simd_gt(b + tol).to_bitmask(),
             unlisted: unlisted.to_bitmask(),
         }
     }
@@ -201,8 +197,7 @@ mod tests {
                 let listed: [Listed; NEAR] = std::array::from_fn(|_| Listed {
                     distance: first + v(0.1).x.abs(),
                     direction: v(2.0).normalize(),
-                    translation: v(0.05),
-                    rise: v(0.02).x.abs(),
+                    rise: v(0.04).x,
                 });
                 let reach = if k == 7 { f64::INFINITY } else { first + 0.15 };
                 let after = if k == 6 {
@@ -221,7 +216,7 @@ mod tests {
             for (k, (bounds, listed, after)) in lanes.iter().enumerate() {
                 let bit = |mask: u32| mask & (1 << k) != 0;
                 for (j, l) in listed.iter().enumerate() {
-                    let skip = bounds.beyond(l.distance, b[k]) || bounds.excludes(l, b[k]);
+                    let skip = bounds.excludes(l, b[k]);
                     assert_eq!(bit(out.need[j]), !skip, "round {round} lane {k} facet {j}");
                     needed += usize::from(!skip);
                     excluded += usize::from(skip);
