@@ -18,6 +18,7 @@
 //! cargo run --release -p tricontact --example search_loop -- walk 1000 5
 //! cargo run --release -p tricontact --example search_loop -- build 1000 5
 //! cargo run --release -p tricontact --example search_loop -- stream 1000 30
+//! cargo run --release -p tricontact --example search_loop -- carried 1000 20
 //! ```
 //!
 //! The scene is `search_bench`'s: a torus of `nu × nu/2` quads split in two (316 gives 99 856
@@ -33,17 +34,22 @@
 //! `build` times [`Bvh::build`] and `refit` [`Bvh::update`] (the torus and its deformed copy in
 //! turn), per facet. `stream` times the incremental search's three largest streams and nothing
 //! else (sequential, like `walk`): per query, a 64-byte record and the query read, an answer
-//! written (the floor its memory traffic sets). Expected output
+//! written (the floor its memory traffic sets). `carried` times the incremental search after
+//! rigid motions of the deformed torus, a translation by 0.1 element sizes and a turn about its
+//! axis moving its outer rim by as much, with the query points fixed or carried along (a query's
+//! motion and the surface's then largely cancel in the first-order bound but not in the Lipschitz
+//! bound, so the queries walk further). Expected output
 //! (the time varies with the machine; these lines are from an AMD EPYC Zen 4, with AVX-512; an
 //! AVX2 machine, Zen 3, read 471.0 ns for the `closest` line):
 //!
 //! ```text
 //! closest, 99856 facets: 313.9 ns per query (best of 15 calls, one core; median 359.8)
-//! incremental, 1000000 facets: 39.3 ns per query (best of 20 calls, one core; median 56.4); 1.071 facets measured per query
+//! incremental, 1000000 facets: 34.2 ns per query (best of 20 calls, one core; median 47.0); 1.071 facets measured per query
 //! build, 1000000 facets: 223.9 ns per facet (best of 4 calls, one core; median 239.4)
 //! refit, 1000000 facets: 45.4 ns per facet (best of 6 calls, one core; median 52.0)
 //! walk, 1000000 facets: 218.1 ns per query (best of 5 calls, one core; median 231.1); 13.16 facets measured per query, 0 answers differ from the tree
 //! stream, 1000000 facets: 6.7 ns per query (best of 30 calls, one core; median 7.3)
+//! carried, 1000000 facets, translated, queries fixed: 71.1 ns per query (best of 20 calls, one core; median 80.2); 1.364 facets measured per query
 //! ```
 
 use std::process::ExitCode;
@@ -53,7 +59,7 @@ use tricontact::search::scenes::{self, torus};
 use tricontact::search::{Bvh, Hit, Neighbourhoods, Query, Surface};
 use tricontact::{ClosestPoint, Feature, Vec3, distance_squared_to_triangle};
 
-const USAGE: &str = "usage: search_loop closest|random|incremental|walk|build|refit|stream [nu ≥ 8, default 316] [reps ≥ 1, default 15] [threads ≥ 1, default 1]";
+const USAGE: &str = "usage: search_loop closest|random|incremental|walk|build|refit|stream|carried [nu ≥ 8, default 316] [reps ≥ 1, default 15] [threads ≥ 1, default 1]";
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -70,7 +76,14 @@ fn main() -> ExitCode {
         || threads == 0
         || !matches!(
             mode,
-            "closest" | "random" | "incremental" | "walk" | "build" | "refit" | "stream"
+            "closest"
+                | "random"
+                | "incremental"
+                | "walk"
+                | "build"
+                | "refit"
+                | "stream"
+                | "carried"
         )
     {
         eprintln!("{USAGE}");
@@ -98,6 +111,10 @@ fn main() -> ExitCode {
     };
     if mode == "walk" {
         walk(&pool, &surface, &bvh, &nodes, &queries, (h, reps));
+        return ExitCode::SUCCESS;
+    }
+    if mode == "carried" {
+        carried(&pool, &surface, &bvh, &nodes, &queries, (h, reps));
         return ExitCode::SUCCESS;
     }
     if mode == "build" || mode == "refit" {
@@ -229,6 +246,58 @@ fn walk(
         times.median * 1e9 / n,
         measured as f64 / n
     );
+}
+
+/// The incremental search after the deformed torus is translated, or turned about its axis, by
+/// 0.1 element sizes `h` (at its outer rim), with the query points fixed or carried along, timed
+/// on the one-thread `pool` (best of `reps` calls; see the module documentation).
+fn carried(
+    pool: &rayon::ThreadPool,
+    surface: &Surface,
+    bvh: &Bvh,
+    nodes: &[Vec3],
+    queries: &[Query],
+    (h, reps): (f64, usize),
+) {
+    let lists = Neighbourhoods::new(bvh, surface, nodes, queries, 0.5 * h).expect("lists");
+    let rim = nodes.iter().map(|p| p.x.hypot(p.y)).fold(0.0, f64::max);
+    let shift = Vec3::new(1.0, 1.0, 1.0).normalize() * (0.1 * h);
+    let angle = 0.1 * h / rim;
+    let turn = |p: &Vec3| {
+        let (c, s) = (angle.cos(), angle.sin());
+        Vec3::new(c * p.x - s * p.y, s * p.x + c * p.y, p.z)
+    };
+    let deformed = scenes::deformed(nodes, h, 0.01);
+    // Motion 0 translates, motion 1 turns.
+    let motion = |k: usize, p: &Vec3| if k == 0 { p + shift } else { turn(p) };
+    for (k, name) in [(0, "translated"), (1, "turned")] {
+        let moved: Vec<Vec3> = deformed.iter().map(|p| motion(k, p)).collect();
+        let carried: Vec<Query> = queries
+            .iter()
+            .map(|q| Query::point(motion(k, &q.point)))
+            .collect();
+        for (how, qs) in [("fixed", queries), ("carried", &carried[..])] {
+            let mut tree = bvh.clone();
+            let mut out = vec![None; qs.len()];
+            let mut measured = 0;
+            let times = pool.install(|| {
+                timed(reps, || {
+                    let stats = lists
+                        .closest_all_into(&mut tree, surface, &moved, qs, f64::INFINITY, &mut out)
+                        .expect("incremental search");
+                    measured = stats.measured;
+                })
+            });
+            let n = qs.len() as f64;
+            println!(
+                "carried, {} facets, {name}, queries {how}: {:.1} ns per query (best of {reps} calls, one core; median {:.1}); {:.3} facets measured per query",
+                surface.len(),
+                times.best * 1e9 / n,
+                times.median * 1e9 / n,
+                measured as f64 / n
+            );
+        }
+    }
 }
 
 /// The incremental search's three largest streams and nothing else, timed (best of `reps`
