@@ -798,10 +798,11 @@ fn listed_torus(around: u32, tube: u32, major: f64, minor: f64, seed: u64) -> Li
 /// Rigid motions of the whole torus (a translation, a rotation about its axis), with the query
 /// points fixed or carried along: the first-order bound excludes the neighbouring facets that the
 /// Lipschitz bound `d₀(f) − m` cannot, so the search measures little more than one facet per query
-/// (1.10 after the translation, 1.11 after the rotation; 1.15 and 1.26 with the facets' whole
-/// relative node motion in place of their rise along the direction, and directions to 7·10⁻³),
-/// and every answer is the tree's. With the Lipschitz bound alone the same lists measure 2.5
-/// facets per query after the translation.
+/// (1.09 after the translation and 1.11 after the rotation with the points fixed, 1.05 with them
+/// carried along the translation; 1.15 and 1.26 with the facets' whole relative node motion in
+/// place of their rise along the direction, and directions to 7·10⁻³), and every answer is the
+/// tree's. With the Lipschitz bound alone the same lists measure 2.5 facets per query after the
+/// translation.
 #[test]
 fn rigid_motions_are_certified_by_the_first_listed_facet() {
     let ListedTorus {
