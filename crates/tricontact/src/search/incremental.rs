@@ -35,16 +35,16 @@
 //! benchmark's torus after a motion of 0.01 element sizes: 1.07 facets measured per query at 10⁶
 //! facets, against 1.10 with directions to 7·10⁻³, 1.15 with the largest node motion relative to
 //! the facet's first node in place of the rise along `n̂`, and 2.0 with the Lipschitz bound
-//! alone). The stored `d₀(f)` is
-//! rounded down and `n̂` decoded within `ε = DIRECTION_ERROR` (1.2·10⁻³): the decoded direction
-//! changes `n̂·(p − p₀)` by at most `ε |p − p₀|` and the rise by at most `ε maxₙ |mₙ| ≤ ε δ`, so
-//! the bound is widened by `ε m`, one number for all of a query's facets, and a listed facet's
-//! bound needs of its nodes only the three products `n̂·mₙ`. (The bound is the same for any
-//! translation `T` subtracted from `p − p₀` and from every `mₙ`; an earlier form took the motion of
-//! the facet's first node and widened by `ε (|p − p₀ − T|₁ + maxₙ |mₙ − T|₁)` per facet, sharper
-//! only where the query points move with the surface, and slower: see
-//! `docs/search-benchmarks.md`.) A margin of 10⁻⁹ of the coordinates' magnitude absorbs
-//! rounding in all these bounds. Where `p₀` was within 10⁻⁶ of that magnitude of a listed facet,
+//! alone). The stored `d₀(f)` is rounded down and `n̂` decoded within `ε = DIRECTION_ERROR`
+//! (1.2·10⁻³): the decoded direction changes `n̂·(p − p₀)` by at most `ε |p − p₀|` and the rise by
+//! at most `ε maxₙ |mₙ| ≤ ε δ`, so the bound is widened by `ε m`, one number for all of a query's
+//! facets, and a listed facet's bound needs of its nodes only the three products `n̂·mₙ`. (The
+//! bound is the same for any translation `T` subtracted from `p − p₀` and from every `mₙ`; an
+//! earlier form took the motion of the facet's first node and widened by
+//! `ε (|p − p₀ − T|₁ + maxₙ |mₙ − T|₁)` per facet, sharper only where the query points move with
+//! the surface, and slower: see `docs/search-benchmarks.md`.) The widening also covers the
+//! rounding of the terms in the motions, and a margin of 10⁻⁹ of the coordinates' magnitude the
+//! rounding in the others. Where `p₀` was within 10⁻⁶ of that magnitude of a listed facet,
 //! its direction is not reliable (rounding) and is not stored: the entry keeps the distance `0`
 //! and no direction, which no bound can exclude, so that facet is measured. (Zero is a
 //! subgradient only where the distance is zero: a query that was `10⁻⁷` from a facet and moves
@@ -1309,8 +1309,8 @@ mod tests {
     /// query points (on all sides, near edges and vertices, and within the direction floor),
     /// moved rigidly, deformed smoothly or with each node on its own, by 10⁻⁶ to 1 of their
     /// size, the query point fixed or moved as much. The bound must also be worth its cost: it
-    /// beats the Lipschitz bound `d₀(f) − |p − p₀| − maxₙ |xₙ − x₀ₙ|` in 99 % of the cases of
-    /// each kind of motion.
+    /// beats the Lipschitz bound `d₀(f) − |p − p₀| − maxₙ |xₙ − x₀ₙ|` in 99.9 % of the cases of
+    /// each kind of motion (13 330 or more of about 13 333).
     #[test]
     fn the_first_order_bound_is_below_the_distance() {
         let mut r = uniform(41);
@@ -1363,7 +1363,7 @@ mod tests {
         // place of the rise, the bound was the sharper in only 94 %, 65 % and 31 % of these cases.)
         let counts = format!("sharper in {sharper:?} of {cases:?}");
         assert!(
-            sharper.iter().zip(&cases).all(|(s, c)| s * 100 > 99 * c),
+            sharper.iter().zip(&cases).all(|(s, c)| s * 1000 > 999 * c),
             "{counts}"
         );
     }
