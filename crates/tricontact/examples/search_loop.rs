@@ -135,10 +135,9 @@ fn main() -> ExitCode {
             }
         });
         println!(
-            "{mode}, {} facets: {:.1} ns per facet (best of {reps} calls, {cores}; median {:.1})",
+            "{mode}, {} facets: {}",
             facets.len(),
-            times.best * 1e9 / facets.len() as f64,
-            times.median * 1e9 / facets.len() as f64
+            times.per(facets.len(), "facet", &cores)
         );
         return ExitCode::SUCCESS;
     }
@@ -177,10 +176,9 @@ fn main() -> ExitCode {
         format!("; {:.3} facets measured per query", m as f64 / nq)
     });
     println!(
-        "{mode}, {} facets: {:.1} ns per query (best of {reps} calls, {cores}; median {:.1}){facets_measured}",
+        "{mode}, {} facets: {}{facets_measured}",
         facets.len(),
-        times.best * 1e9 / nq,
-        times.median * 1e9 / nq
+        times.per(queries.len(), "query", &cores)
     );
     ExitCode::SUCCESS
 }
@@ -240,10 +238,9 @@ fn walk(
         .count();
     let n = queries.len() as f64;
     println!(
-        "walk, {} facets: {:.1} ns per query (best of {reps} calls, one core; median {:.1}); {:.2} facets measured per query, {differ} answers differ from the tree",
+        "walk, {} facets: {}; {:.2} facets measured per query, {differ} answers differ from the tree",
         surface.len(),
-        times.best * 1e9 / n,
-        times.median * 1e9 / n,
+        times.per(queries.len(), "query", "one core"),
         measured as f64 / n
     );
 }
@@ -288,13 +285,11 @@ fn carried(
                     measured = stats.measured;
                 })
             });
-            let n = qs.len() as f64;
             println!(
-                "carried, {} facets, {name}, queries {how}: {:.1} ns per query (best of {reps} calls, one core; median {:.1}); {:.3} facets measured per query",
+                "carried, {} facets, {name}, queries {how}: {}; {:.3} facets measured per query",
                 surface.len(),
-                times.best * 1e9 / n,
-                times.median * 1e9 / n,
-                measured as f64 / n
+                times.per(qs.len(), "query", "one core"),
+                measured as f64 / qs.len() as f64
             );
         }
     }
@@ -343,12 +338,28 @@ fn timed(reps: usize, mut f: impl FnMut()) -> Times {
     Times {
         best: times[0],
         median: times[times.len() / 2],
+        reps,
     }
 }
 
-/// What [`timed`] measured, in seconds.
+/// What [`timed`] measured, in seconds, over `reps` calls.
 #[derive(Clone, Copy)]
 struct Times {
     best: f64,
     median: f64,
+    reps: usize,
+}
+
+impl Times {
+    /// The best and median times per item of `n` (a query, a facet) as this program prints them,
+    /// the calls run on `cores`.
+    fn per(&self, n: usize, item: &str, cores: &str) -> String {
+        let n = n as f64;
+        format!(
+            "{:.1} ns per {item} (best of {} calls, {cores}; median {:.1})",
+            self.best * 1e9 / n,
+            self.reps,
+            self.median * 1e9 / n
+        )
+    }
 }
