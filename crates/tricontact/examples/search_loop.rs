@@ -109,12 +109,21 @@ fn main() -> ExitCode {
     } else {
         format!("{threads} threads")
     };
-    if mode == "walk" {
-        walk(&pool, &surface, &bvh, &nodes, &queries, (h, reps));
-        return ExitCode::SUCCESS;
-    }
-    if mode == "carried" {
-        carried(&pool, &surface, &bvh, &nodes, &queries, (h, reps));
+    if mode == "walk" || mode == "carried" {
+        let scene = Scene {
+            pool: &pool,
+            surface: &surface,
+            bvh: &bvh,
+            nodes: &nodes,
+            queries: &queries,
+            h,
+            reps,
+        };
+        if mode == "walk" {
+            walk(&scene);
+        } else {
+            carried(&scene);
+        }
         return ExitCode::SUCCESS;
     }
     if mode == "build" || mode == "refit" {
@@ -183,16 +192,31 @@ fn main() -> ExitCode {
     ExitCode::SUCCESS
 }
 
+/// What the modes that time the incremental search's alternatives share: the one-thread pool, the
+/// torus and its tree, the queries, the element size `h` and the number of calls to time.
+#[derive(Clone, Copy)]
+struct Scene<'a> {
+    pool: &'a rayon::ThreadPool,
+    surface: &'a Surface,
+    bvh: &'a Bvh,
+    nodes: &'a [Vec3],
+    queries: &'a [Query],
+    h: f64,
+    reps: usize,
+}
+
 /// The neighbour walk after a motion of 0.01 element sizes `h`, timed on the one-thread `pool`
 /// (best of `reps` calls) against the tree's answers (see the module documentation).
-fn walk(
-    pool: &rayon::ThreadPool,
-    surface: &Surface,
-    bvh: &Bvh,
-    nodes: &[Vec3],
-    queries: &[Query],
-    (h, reps): (f64, usize),
-) {
+fn walk(scene: &Scene<'_>) {
+    let Scene {
+        pool,
+        surface,
+        bvh,
+        nodes,
+        queries,
+        h,
+        reps,
+    } = *scene;
     let before = bvh.closest_all(surface, queries, f64::INFINITY);
     let moved = scenes::deformed(nodes, h, 0.01);
     let mut tree = bvh.clone();
@@ -248,23 +272,22 @@ fn walk(
 /// The incremental search after the deformed torus is translated, or turned about its axis, by
 /// 0.1 element sizes `h` (at its outer rim), with the query points fixed or carried along, timed
 /// on the one-thread `pool` (best of `reps` calls; see the module documentation).
-fn carried(
-    pool: &rayon::ThreadPool,
-    surface: &Surface,
-    bvh: &Bvh,
-    nodes: &[Vec3],
-    queries: &[Query],
-    (h, reps): (f64, usize),
-) {
-    let lists = Neighbourhoods::new(bvh, surface, nodes, queries, 0.5 * h).expect("lists");
-    let rim = nodes.iter().map(|p| p.x.hypot(p.y)).fold(0.0, f64::max);
+fn carried(scene: &Scene<'_>) {
+    let (surface, queries, h) = (scene.surface, scene.queries, scene.h);
+    let lists =
+        Neighbourhoods::new(scene.bvh, surface, scene.nodes, queries, 0.5 * h).expect("lists");
+    let rim = scene
+        .nodes
+        .iter()
+        .map(|p| p.x.hypot(p.y))
+        .fold(0.0, f64::max);
     let shift = Vec3::new(1.0, 1.0, 1.0).normalize() * (0.1 * h);
     let angle = 0.1 * h / rim;
     let turn = |p: &Vec3| {
         let (c, s) = (angle.cos(), angle.sin());
         Vec3::new(c * p.x - s * p.y, s * p.x + c * p.y, p.z)
     };
-    let deformed = scenes::deformed(nodes, h, 0.01);
+    let deformed = scenes::deformed(scene.nodes, h, 0.01);
     // Motion 0 translates, motion 1 turns.
     let motion = |k: usize, p: &Vec3| if k == 0 { p + shift } else { turn(p) };
     for (k, name) in [(0, "translated"), (1, "turned")] {
@@ -274,11 +297,11 @@ fn carried(
             .map(|q| Query::point(motion(k, &q.point)))
             .collect();
         for (how, qs) in [("fixed", queries), ("carried", &carried[..])] {
-            let mut tree = bvh.clone();
+            let mut tree = scene.bvh.clone();
             let mut out = vec![None; qs.len()];
             let mut measured = 0;
-            let times = pool.install(|| {
-                timed(reps, || {
+            let times = scene.pool.install(|| {
+                timed(scene.reps, || {
                     let stats = lists
                         .closest_all_into(&mut tree, surface, &moved, qs, f64::INFINITY, &mut out)
                         .expect("incremental search");
