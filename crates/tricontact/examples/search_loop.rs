@@ -118,6 +118,7 @@ fn main() -> ExitCode {
             queries: &queries,
             h,
             reps,
+            cores: &cores,
         };
         if mode == "walk" {
             walk(&scene);
@@ -192,8 +193,9 @@ fn main() -> ExitCode {
     ExitCode::SUCCESS
 }
 
-/// What the modes that time the incremental search's alternatives share: the one-thread pool, the
-/// torus and its tree, the queries, the element size `h` and the number of calls to time.
+/// What the modes that time the incremental search's alternatives share: the pool, the torus and
+/// its tree, the queries, the element size `h`, the number of calls to time and what the pool's
+/// threads are called in the output.
 #[derive(Clone, Copy)]
 struct Scene<'a> {
     pool: &'a rayon::ThreadPool,
@@ -203,6 +205,7 @@ struct Scene<'a> {
     queries: &'a [Query],
     h: f64,
     reps: usize,
+    cores: &'a str,
 }
 
 /// The neighbour walk after a motion of 0.01 element sizes `h`, timed on the one-thread `pool`
@@ -216,6 +219,7 @@ fn walk(scene: &Scene<'_>) {
         queries,
         h,
         reps,
+        ..
     } = *scene;
     let before = bvh.closest_all(surface, queries, f64::INFINITY);
     let moved = scenes::deformed(nodes, h, 0.01);
@@ -271,7 +275,7 @@ fn walk(scene: &Scene<'_>) {
 
 /// The incremental search after the deformed torus is translated, or turned about its axis, by
 /// 0.1 element sizes `h` (at its outer rim), with the query points fixed or carried along, timed
-/// on the one-thread `pool` (best of `reps` calls; see the module documentation).
+/// on the scene's pool (best of `reps` calls; see the module documentation).
 fn carried(scene: &Scene<'_>) {
     let (surface, queries, h) = (scene.surface, scene.queries, scene.h);
     let lists =
@@ -311,7 +315,7 @@ fn carried(scene: &Scene<'_>) {
             println!(
                 "carried, {} facets, {name}, queries {how}: {}; {:.3} facets measured per query",
                 surface.len(),
-                times.per(qs.len(), "query", "one core"),
+                times.per(qs.len(), "query", scene.cores),
                 measured as f64 / qs.len() as f64
             );
         }
