@@ -945,8 +945,8 @@ impl Neighbourhoods {
 }
 
 /// What the bounds need of the listed facet whose entry is `e` and whose nodes moved by `m` since
-/// the lists were made: its distance and (decoded) direction `n̂` then, and the rise
-/// `maxₙ n̂·mₙ` of its nodes along `n̂` (see the module documentation, "Certificate").
+/// the lists were made: its distance then less the rise `maxₙ n̂·mₙ` of its nodes along its
+/// (decoded) direction `n̂`, and `n̂` (see the module documentation, "Certificate").
 #[inline(always)]
 fn listed_of(e: &Entry, m: [Vec3; 3]) -> Listed {
     let direction = e.direction.decode();
@@ -954,10 +954,10 @@ fn listed_of(e: &Entry, m: [Vec3; 3]) -> Listed {
     let r = if ra > rb { ra } else { rb };
     // A NaN here may be dropped: a motion that is not finite makes `δ` not finite, and then no
     // query is certified (their unlisted facets are not excluded).
+    let rise = if r > rc { r } else { rc };
     Listed {
-        distance: f64::from(e.distance),
+        level: f64::from(e.distance) - rise,
         direction,
-        rise: if r > rc { r } else { rc },
     }
 }
 

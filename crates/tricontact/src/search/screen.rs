@@ -22,14 +22,13 @@ pub(crate) const MARGIN: f64 = 1e-9;
 /// Listed facets after the first that are screened by the first-order bound.
 pub(crate) const NEAR: usize = 2;
 
-/// What a screen needs of a listed facet: its distance then, its direction then (decoded), and
-/// the rise `r = maxₙ n̂·mₙ` of its nodes along that direction since (negative when the facet
-/// moved away along `n̂`).
+/// What a screen needs of a listed facet: its level `d₀(f) − r`, its distance then less the rise
+/// `r = maxₙ n̂·mₙ` of its nodes along its direction since (`r` is negative when the facet moved
+/// away along `n̂`), and that direction `n̂` then (decoded).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Listed {
-    pub(crate) distance: f64,
+    pub(crate) level: f64,
     pub(crate) direction: Vec3,
-    pub(crate) rise: f64,
 }
 
 /// The values of [`PAIRS`] queries, lane by lane.
@@ -101,7 +100,7 @@ impl Bounds {
     /// `true` when the listed facet `l` is farther than `b` now by the first-order bound.
     #[inline(always)]
     pub(crate) fn excludes(&self, l: &Listed, b: f64) -> bool {
-        (l.distance - l.rise) + l.direction.dot(&self.dp) - self.slack > b
+        l.level + l.direction.dot(&self.dp) - self.slack > b
     }
 
     /// `true` when the facets not listed are farther than `b`, or than the search distance, now
@@ -130,7 +129,7 @@ impl Stage {
         self.reach[k] = reach;
         self.after[k] = after;
         for (j, l) in listed.iter().enumerate() {
-            self.level[j][k] = l.distance - l.rise;
+            self.level[j][k] = l.level;
             for d in 0..3 {
                 self.direction[j][d][k] = l.direction[d];
             }
@@ -194,10 +193,14 @@ mod tests {
                 let p0 = v(4.0);
                 let q = p0 + v(0.1);
                 let first = 0.2 + v(0.2).x;
-                let listed: [Listed; NEAR] = std::array::from_fn(|_| Listed {
-                    distance: first + v(0.1).x.abs(),
-                    direction: v(2.0).normalize(),
-                    rise: v(0.04).x,
+                let listed: [Listed; NEAR] = std::array::from_fn(|_| {
+                    let distance = first + v(0.1).x.abs();
+                    let direction = v(2.0).normalize();
+                    let rise = v(0.04).x;
+                    Listed {
+                        level: distance - rise,
+                        direction,
+                    }
                 });
                 let reach = if k == 7 { f64::INFINITY } else { first + 0.15 };
                 let after = if k == 6 {
