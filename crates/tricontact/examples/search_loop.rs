@@ -104,7 +104,8 @@ fn main() -> ExitCode {
         .num_threads(threads)
         .build()
         .expect("a thread pool");
-    let cores = if threads == 1 || mode == "stream" {
+    // `walk` and `stream` are sequential whatever the pool.
+    let cores = if threads == 1 || matches!(mode, "walk" | "stream") {
         "one core".to_string()
     } else {
         format!("{threads} threads")
@@ -208,8 +209,9 @@ struct Scene<'a> {
     cores: &'a str,
 }
 
-/// The neighbour walk after a motion of 0.01 element sizes `h`, timed on the one-thread `pool`
-/// (best of `reps` calls) against the tree's answers (see the module documentation).
+/// The neighbour walk after a motion of 0.01 element sizes `h`, query after query (sequential, on
+/// the scene's pool), timed (best of `reps` calls) against the tree's answers (see the module
+/// documentation).
 fn walk(scene: &Scene<'_>) {
     let Scene {
         pool,
@@ -268,7 +270,7 @@ fn walk(scene: &Scene<'_>) {
     println!(
         "walk, {} facets: {}; {:.2} facets measured per query, {differ} answers differ from the tree",
         surface.len(),
-        times.per(queries.len(), "query", "one core"),
+        times.per(queries.len(), "query", scene.cores),
         measured as f64 / n
     );
 }
