@@ -330,3 +330,37 @@ fn a_duplicate_key_is_named() {
         assert!(e.contains(expected), "{e}");
     }
 }
+
+/// An invalid material is reported once, by its key: a contact pair on its body does not add a
+/// default-penalty problem that blames a modulus the user never gave (`E = NaN` from `nu = 0.5`).
+#[test]
+fn an_invalid_material_gives_no_knock_on_default_penalty_problem() {
+    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/contact-block");
+    let d = temp_dir("penalty-knock-on");
+    std::fs::copy(example.join("blocks.msh"), d.join("blocks.msh")).expect("copy mesh");
+    let text = std::fs::read_to_string(example.join("model.toml")).expect("read model");
+    assert_eq!(
+        text.matches("nu = 0.3").count(),
+        2,
+        "both materials give nu"
+    );
+    // The base (master) material, then the block (slave) material.
+    for (which, name) in [(0, "base"), (1, "block")] {
+        let mut parts: Vec<&str> = text.split("nu = 0.3").collect();
+        let bad = format!("{}nu = 0.5{}", parts[which], parts[which + 1]);
+        parts.splice(which..=which + 1, [bad.as_str()]);
+        let model = parts.join("nu = 0.3");
+        std::fs::write(d.join("model.toml"), &model).expect("write model");
+        let msg = load_analysis(&d.join("model.toml"))
+            .expect_err("invalid material")
+            .to_string();
+        assert!(
+            msg.contains(&format!(
+                "material '{name}': need 1e-100 < E < 1e100 and -1 < nu < 0.5"
+            )),
+            "{msg}"
+        );
+        assert!(!msg.contains("default penalty"), "knock-on problem: {msg}");
+        assert!(!msg.contains("NaN"), "{msg}");
+    }
+}

@@ -391,7 +391,11 @@ pub fn resolve(
     let e = owner_e(&master.elements).or(slave_e).unwrap_or(1.0);
     let (h_mean, h_max) = edge_lengths(mesh, &m_facets);
     let penalty = def.penalty.unwrap_or(10.0 * e * h_mean);
-    if def.penalty.is_none() && !(penalty > 0.0 && penalty.is_finite()) {
+    // A valid material has a finite, positive modulus: any other `e` comes from a material that
+    // is reported invalid with its own key (`nu = 0.5` gives `E = NaN` here), and the model is
+    // rejected for it, so this pair does not report it again.
+    let modulus_valid = e > 0.0 && e.is_finite();
+    if def.penalty.is_none() && modulus_valid && !(penalty > 0.0 && penalty.is_finite()) {
         problems.push(format!(
             "contact '{name}': the default penalty 10 E h is {penalty:e} (E = {e:e}, h = {h_mean:e}); give `penalty`"
         ));
