@@ -173,6 +173,12 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<Mesh> {
     let mut tag_to_index: HashMap<u64, usize> = HashMap::new();
     if let Some(nodes) = &msh.data.nodes {
         let total: usize = nodes.node_blocks.iter().map(|b| b.nodes.len()).sum();
+        if usize::try_from(nodes.num_nodes).ok() != Some(total) {
+            return Err(merr(format!(
+                "the $Nodes header counts {} nodes but its blocks hold {total}",
+                nodes.num_nodes
+            )));
+        }
         let mut file_tags = crate::gmsh_nodes::node_tags(bytes)
             .filter(|t| t.len() == total)
             .map(Vec::into_iter);
@@ -230,6 +236,17 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<Mesh> {
     let Some(elements) = &msh.data.elements else {
         return Err(merr("the mesh has no $Elements section".into()));
     };
+    let listed: usize = elements
+        .element_blocks
+        .iter()
+        .map(|b| b.elements.len())
+        .sum();
+    if usize::try_from(elements.num_elements).ok() != Some(listed) {
+        return Err(merr(format!(
+            "the $Elements header counts {} elements but its blocks hold {listed}",
+            elements.num_elements
+        )));
+    }
     let mut element_tags = std::collections::HashSet::new();
     for block in &elements.element_blocks {
         let dim = block.entity_dim;

@@ -63,7 +63,9 @@ fn ascii_tags(text: &str) -> Option<Vec<u64>> {
     let blocks = int(&mut words)?;
     let count = usize::try_from(int(&mut words)?).ok()?;
     words.nth(1)?;
-    let mut tags = Vec::with_capacity(count);
+    // A tag takes at least two bytes (a digit and a separator): a larger count is not in the
+    // file, and reserving it could exhaust memory.
+    let mut tags = Vec::with_capacity(count.min(text.len() / 2));
     for _ in 0..blocks {
         words.nth(2)?;
         let n = usize::try_from(int(&mut words)?).ok()?;
@@ -72,7 +74,7 @@ fn ascii_tags(text: &str) -> Option<Vec<u64>> {
         }
         // The coordinates.
         if n > 0 {
-            words.nth(3 * n - 1)?;
+            words.nth(n.checked_mul(3)? - 1)?;
         }
     }
     (tags.len() == count).then_some(tags)

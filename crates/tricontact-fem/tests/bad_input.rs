@@ -196,6 +196,36 @@ fn old_msh_format_and_garbage_are_rejected_clearly() {
     assert!(e.to_string().contains("is it complete?"), "{e}");
 }
 
+/// A `$Nodes` header whose node count is absurd (a corrupt or hand-edited file) is an error, not
+/// an allocation of that many tags (which aborted the process) or a capacity overflow (a panic).
+#[test]
+fn an_absurd_node_count_in_the_header_is_an_error() {
+    let good = msh(4, &TET);
+    assert!(good.contains("$Nodes\n1 4 1 4\n"), "{good}");
+    for count in ["999999999999999", "18446744073709551615", "1000000000"] {
+        let bad = good.replace("$Nodes\n1 4 1 4\n", &format!("$Nodes\n1 {count} 1 4\n"));
+        let e = gmsh::parse_msh(bad.as_bytes(), Path::new("n.msh")).expect_err(count);
+        assert!(matches!(e, FemError::Mesh { .. }), "{count}: {e}");
+        assert!(
+            e.to_string().contains(&format!(
+                "the $Nodes header counts {count} nodes but its blocks hold 4"
+            )),
+            "{e}"
+        );
+    }
+    let bad = good.replace("$Elements\n1 1 1 1\n", "$Elements\n1 2 1 1\n");
+    let e = gmsh::parse_msh(bad.as_bytes(), Path::new("e.msh")).expect_err("elements");
+    assert!(
+        e.to_string()
+            .contains("the $Elements header counts 2 elements but its blocks hold 1"),
+        "{e}"
+    );
+    // A block claiming more nodes than the file holds: `3 n` would overflow.
+    let bad = good.replace("3 1 0 4\n", "3 1 0 9223372036854775807\n");
+    let e = gmsh::parse_msh(bad.as_bytes(), Path::new("b.msh")).expect_err("block");
+    assert!(matches!(e, FemError::Mesh { .. }), "{e}");
+}
+
 #[test]
 fn values_that_would_give_nan_or_never_end_are_rejected_by_key() {
     // model_text ends with a bare `[[step]]`: its keys follow.
