@@ -279,6 +279,8 @@ pub fn run(
     let mut summary = RunSummary::default();
     let mut prev_mask: Vec<bool> = Vec::new();
     let mut last_reactions = vec![0.0; n_dofs];
+    // The force scale `q̄` of the last step (see `newton`): the first increment of a step uses it.
+    let mut carried_scale = 0.0;
     for (s, step) in an.steps.iter().enumerate() {
         let (mask, targets) = step_constraints(an, s);
         if !extra.supports_bodies() {
@@ -303,6 +305,8 @@ pub fn run(
         let mut attempts: Vec<(f64, String)> = Vec::new();
         // The last converged increment of this step: `u_n − u_{n−1}` and its `Δt`.
         let mut last: Option<(Vec<f64>, f64)> = None;
+        // `∫ r_ref dt` over the step's converged increments, for the force scale `q̄`.
+        let mut reference_integral = 0.0;
         while t < 1.0 - 1e-12 {
             let t_new = control.target(t);
             let mut fext = external_forces(an, n_dofs, s, t_new);
@@ -322,6 +326,11 @@ pub fn run(
                 fext: &fext,
                 prescribed: &prescribed,
                 follower: &follower,
+                force_scale: if t > 0.0 {
+                    reference_integral / t
+                } else {
+                    carried_scale
+                },
             };
             let start = match (&last, step.extrapolation, attempts.is_empty()) {
                 (Some((du, dt)), Extrapolation::Linear, true) => {
@@ -334,6 +343,7 @@ pub fn run(
                     extra.commit();
                     let du = c.u.iter().zip(&u).map(|(a, b)| a - b).collect();
                     last = Some((du, t_new - t));
+                    reference_integral += c.reference * (t_new - t);
                     u = c.u;
                     t = t_new;
                     increment += 1;
@@ -399,6 +409,7 @@ pub fn run(
             }
         }
         prev_mask = mask;
+        carried_scale = reference_integral / t;
     }
     summary.u = u;
     Ok(summary)

@@ -10,13 +10,22 @@
 //! small-strain steps (constant tangent) the factorization is computed once
 //! per step and reused by every iteration and increment.
 //!
-//! Convergence (both must hold), with `r_ref = max(‖r⁰‖, ‖f_ext,f‖, ‖R‖)`
-//! (`R` the reactions) and `Δu = u − u_committed`:
+//! Convergence (both must hold), with `r_ref = max(‖r⁰‖, ‖f_ext,f‖, ‖R‖, φ q̄)`
+//! (`R` the reactions, `q̄` the step's force scale below) and `Δu = u − u_committed`:
 //! * `‖r_f‖ ≤ tol_r · r_ref`;
 //! * `‖δu_last‖ · min(1, ‖r_f^k‖/‖r_f^{k−1}‖) ≤ tol_u · max(‖Δu‖, 10⁻³‖u‖)`
 //!   — the last correction scaled by the observed contraction, an estimate
 //!   of the next one (so a linear problem converges after one solve); the
 //!   floor `10⁻³‖u‖` keeps increments that change nothing from stalling.
+//!
+//! The force scale `q̄` is the time average of `r_ref` over the step's converged increments (the
+//! previous step's, for a step's first increment; none for the first step's), and `φ` is
+//! [`SCALE_FRACTION`] (10⁻²). It matters only where an increment has no force of its own: a body
+//! that only translates, or one that has just left contact, carries no load and no reaction, and
+//! an increment extrapolated from the last one starts exactly at its answer, so `r⁰` and every
+//! residual are round-off (10⁻¹² where the step's forces were 10³); the relative test then
+//! compared round-off with round-off and failed every such increment. Elsewhere `r_ref` is far
+//! above `φ q̄` and the test is unchanged.
 //!
 //! Norms are weighted so that every entry is a force (residuals) or a length (corrections): an
 //! extra unknown's equation counts `κ` times its residual and `1/κ` times its correction, `κ`
@@ -81,6 +90,10 @@ impl std::fmt::Display for Failure {
         }
     }
 }
+
+/// The fraction `φ` of the step's force scale `q̄` below which the reference of the residual test
+/// does not fall (see the module documentation).
+pub const SCALE_FRACTION: f64 = 1e-2;
 
 /// Relative residual or correction below which an unmet tolerance is taken to ask for more than
 /// double precision gives: round-off in the assembled forces is about 10⁻¹⁶ of their terms, times
@@ -163,6 +176,8 @@ pub struct IncrementProblem<'a> {
     pub prescribed: &'a [(usize, f64)],
     /// Follower pressures `(load index, pressure)` at the increment's end.
     pub follower: &'a [(usize, f64)],
+    /// The force scale of the step so far, `q̄` (see the module documentation; zero for none).
+    pub force_scale: f64,
 }
 
 /// Solves one increment from the committed `u0`, iterating from `start` (`u0`, or the converged
@@ -200,7 +215,7 @@ pub fn solve_increment(
     let weights = Weights::new(dm, &extra.residual_scales());
 
     let mut residuals = Vec::new();
-    let mut reference = fext_norm;
+    let mut reference = fext_norm.max(SCALE_FRACTION * p.force_scale);
     let mut du_norm = 0.0;
     // The weighted norm of the last correction in full (a line search applies a fraction of it).
     let mut full_norm = 0.0;
