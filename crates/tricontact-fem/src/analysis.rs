@@ -396,6 +396,9 @@ impl Analysis {
             };
             match mesh.lookup(&b.group, Some(3)) {
                 Err(m) => problems.push(invalid(format!("body: {m}"))),
+                Ok(Some(g)) if g.dim == 3 && g.elements.is_empty() => problems.push(invalid(
+                    format!("body '{}': the volume group has no elements", b.group),
+                )),
                 Ok(Some(g)) if g.dim == 3 => {
                     for &e in &g.elements {
                         if owner[e].is_some() {
@@ -730,6 +733,20 @@ impl Analysis {
                         problems.push(invalid(format!(
                             "load '{}': pressure needs a surface (2D) group, '{}' has dimension {}",
                             l.group, g.name, g.dim
+                        )));
+                        continue;
+                    }
+                    if g.elements.is_empty() {
+                        problems.push(invalid(format!(
+                            "load '{}': the surface group has no faces",
+                            l.group
+                        )));
+                        continue;
+                    }
+                    if let Some((a, b)) = loads::repeated_face(&mesh, &g.elements) {
+                        problems.push(invalid(format!(
+                            "load '{}': elements {a} and {b} (Gmsh tags) are the same face: its pressure would count twice",
+                            l.group
                         )));
                         continue;
                     }

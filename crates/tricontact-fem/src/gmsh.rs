@@ -269,6 +269,14 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<Mesh> {
                 group: group_name(dim, phys[0]),
             });
         }
+        if let Some(k) = kind.filter(|k| usize::try_from(dim).ok() != Some(k.dim())) {
+            return Err(merr(format!(
+                "an element block of the {dim}D entity {} (group '{}') holds {k:?} elements, which are {}D",
+                block.entity_tag,
+                group_name(dim, phys[0]),
+                k.dim()
+            )));
+        }
         for el in &block.elements {
             if !element_tags.insert(el.element_tag) {
                 return Err(merr(format!(

@@ -26,6 +26,23 @@ pub fn node_to_elements(n_nodes: usize, elements: &[&Element]) -> Vec<Vec<usize>
     map
 }
 
+/// The Gmsh tags of the first two of `faces` (indices into the mesh's elements) on the same nodes,
+/// if any: a face listed twice would carry its pressure twice.
+#[must_use]
+pub fn repeated_face(mesh: &Mesh, faces: &[usize]) -> Option<(u64, u64)> {
+    let mut seen: HashMap<Vec<usize>, u64> = HashMap::with_capacity(faces.len());
+    for &f in faces {
+        let el = &mesh.elements[f];
+        let mut nodes = el.nodes.clone();
+        nodes.sort_unstable();
+        if let Some(&first) = seen.get(&nodes) {
+            return Some((first, el.tag));
+        }
+        seen.insert(nodes, el.tag);
+    }
+    None
+}
+
 /// Area vector `∂X/∂ξ × ∂X/∂η` and shape functions at every face quadrature
 /// point: `(weight · area vector, N)`.
 fn face_points(mesh: &Mesh, face: &Element) -> Vec<([f64; 3], [f64; shape::MAX_NODES])> {

@@ -115,9 +115,9 @@ impl Component {
     }
 }
 
-/// Prescribed displacement components (any subset).
-#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
+/// Prescribed displacement components (any subset), written as a table: `{ x = 0.1, z = -0.05 }`.
+/// An array is refused (its values would be taken in order and any beyond the third ignored).
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Displacement {
     /// x component.
     pub x: Option<f64>,
@@ -125,6 +125,39 @@ pub struct Displacement {
     pub y: Option<f64>,
     /// z component.
     pub z: Option<f64>,
+}
+
+impl<'de> Deserialize<'de> for Displacement {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        /// The table's keys.
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Table {
+            x: Option<f64>,
+            y: Option<f64>,
+            z: Option<f64>,
+        }
+        /// Accepts a table only.
+        struct OnlyTable;
+        impl<'de> serde::de::Visitor<'de> for OnlyTable {
+            type Value = Displacement;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("a table of components, such as { x = 0.1, z = -0.05 }")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> std::result::Result<Displacement, A::Error> {
+                let t = Table::deserialize(serde::de::value::MapAccessDeserializer::new(map))?;
+                Ok(Displacement {
+                    x: t.x,
+                    y: t.y,
+                    z: t.z,
+                })
+            }
+        }
+        d.deserialize_map(OnlyTable)
+    }
 }
 
 /// `[[boundary]]`.
@@ -399,7 +432,7 @@ impl Model {
     /// # Errors
     /// A syntax/schema error with line and column.
     pub fn parse(text: &str, path: &Path) -> Result<Self> {
-        toml::from_str(text).map_err(|e| {
+        let model: Self = toml::from_str(text).map_err(|e| {
             let mut message = e.message().trim().replace('\n', " ");
             // The parser's "duplicate key" does not say which: its span covers the key.
             if message == "duplicate key"
@@ -419,7 +452,16 @@ impl Model {
                 path: path.to_path_buf(),
                 message: format!("{at}{message}"),
             }
-        })
+        })?;
+        if model.mesh.file.as_os_str().is_empty() {
+            return Err(FemError::ModelSyntax {
+                path: path.to_path_buf(),
+                message:
+                    "[mesh] file is empty (give the .msh file, relative to the model's folder)"
+                        .into(),
+            });
+        }
+        Ok(model)
     }
 
     /// The mesh path resolved against the model folder.

@@ -284,7 +284,13 @@ fn overlapping_bodies_are_reported_once_per_pair() {
 fn an_unresolved_body_is_reported_without_knock_on_errors() {
     let extra = "[[boundary]]\ngroup = \"solid\"\nfix = [\"x\"]\n[[load]]\ngroup = \"base\"\npressure = 1.0\n";
     let text = model_text("solid", extra).replace("material = \"m\"", "material = \"steel\"");
-    let p = setup("knock-on", &msh(4, &TET), &text);
+    // The pressure's surface holds a face of the tet (an empty one is a problem of its own).
+    let mesh = msh(4, &TET).replace(
+        "$Elements\n1 1 1 1\n3 1 4 1\n1 1 2 3 4\n",
+        "$Elements\n2 2 1 2\n3 1 4 1\n1 1 2 3 4\n2 1 2 1\n2 1 2 3\n",
+    );
+    assert!(mesh.contains("2 1 2 3\n"), "{mesh}");
+    let p = setup("knock-on", &mesh, &text);
     let msg = load_analysis(&p).expect_err("unknown material").to_string();
     assert!(
         msg.contains("body 'solid': unknown material 'steel' (materials: m)"),
@@ -393,4 +399,76 @@ fn an_invalid_material_gives_no_knock_on_default_penalty_problem() {
         assert!(!msg.contains("default penalty"), "knock-on problem: {msg}");
         assert!(!msg.contains("NaN"), "{msg}");
     }
+}
+
+/// Groups that resolve but hold nothing, or hold the wrong things, are named: a pressure on an
+/// empty surface group (it was dropped silently), a body on an empty volume group (its supports and
+/// loads were blamed instead), a face listed twice in a pressure group (its pressure counted
+/// twice), and volume elements in a surface entity (they made the body empty).
+#[test]
+fn empty_repeated_and_misplaced_group_contents_are_named() {
+    let pressure = "[[boundary]]\ngroup = \"solid\"\nfix = [\"x\", \"y\", \"z\"]\n[[load]]\ngroup = \"base\"\npressure = 1.0\n";
+    let p = setup(
+        "empty-pressure",
+        &msh(4, &TET),
+        &model_text("solid", pressure),
+    );
+    let msg = load_analysis(&p).expect_err("empty").to_string();
+    assert!(
+        msg.contains("load 'base': the surface group has no faces"),
+        "{msg}"
+    );
+
+    let ghost = msh(4, &TET).replace("$PhysicalNames\n2\n", "$PhysicalNames\n3\n3 7 \"ghost\"\n");
+    let p = setup("empty-body", &ghost, &model_text("ghost", ""));
+    let msg = load_analysis(&p).expect_err("empty body").to_string();
+    assert!(
+        msg.contains("body 'ghost': the volume group has no elements"),
+        "{msg}"
+    );
+
+    // The tet and, in the surface entity of "base", its face 1 2 3 twice (in either orientation).
+    let twice = msh(4, &TET).replace(
+        "$Elements\n1 1 1 1\n3 1 4 1\n1 1 2 3 4\n",
+        "$Elements\n2 3 1 3\n3 1 4 1\n1 1 2 3 4\n2 1 2 2\n2 1 3 2\n3 3 2 1\n",
+    );
+    assert!(twice.contains("3 3 2 1"), "{twice}");
+    let p = setup("twice", &twice, &model_text("solid", pressure));
+    let msg = load_analysis(&p).expect_err("twice").to_string();
+    assert!(
+        msg.contains("load 'base': elements 2 and 3 (Gmsh tags) are the same face"),
+        "{msg}"
+    );
+
+    let misplaced = msh(4, &TET).replace("\n3 1 4 1\n", "\n2 1 4 1\n");
+    let e = gmsh::parse_msh(misplaced.as_bytes(), Path::new("m.msh")).expect_err("misplaced");
+    assert!(
+        e.to_string().contains(
+            "an element block of the 2D entity 1 (group 'base') holds Tet4 elements, which are 3D"
+        ),
+        "{e}"
+    );
+}
+
+/// A displacement is a table of components; an array (whose fourth value was ignored) is refused
+/// with the line of the key.
+#[test]
+fn a_displacement_array_is_refused() {
+    let extra = "[[boundary]]\ngroup = \"solid\"\ndisplacement = [0.1, 0.2, 0.3, 0.4]\n";
+    let e = Model::parse(&model_text("solid", extra), Path::new("m.toml")).expect_err("array");
+    let msg = e.to_string();
+    assert!(msg.contains("m.toml: line 13"), "{msg}");
+    assert!(msg.contains("a table of components"), "{msg}");
+}
+
+/// An empty `[mesh] file` is named as such (it read the model's folder and said only
+/// ": No such file or directory").
+#[test]
+fn an_empty_mesh_file_is_named() {
+    let text = model_text("solid", "").replace("file = \"m.msh\"", "file = \"\"");
+    let e = Model::parse(&text, Path::new("m.toml")).expect_err("empty file");
+    assert!(
+        e.to_string().contains("m.toml: [mesh] file is empty"),
+        "{e}"
+    );
 }
