@@ -24,6 +24,14 @@ use crate::mesh::{Element, ElementKind, Group, Mesh};
 /// # Errors
 /// I/O errors, parse errors, unsupported element types in a physical group.
 pub fn read_msh(path: &Path) -> Result<Mesh> {
+    // A device or a pipe (`/dev/zero`) would be read until memory runs out.
+    let meta = std::fs::metadata(path).map_err(|e| FemError::io(path, e))?;
+    if !meta.is_file() {
+        return Err(FemError::Mesh {
+            path: path.to_path_buf(),
+            message: "not a regular file (a mesh is a .msh file)".into(),
+        });
+    }
     let bytes = std::fs::read(path).map_err(|e| FemError::io(path, e))?;
     parse_msh(&bytes, path)
 }
@@ -118,6 +126,8 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<Mesh> {
         path: path.to_path_buf(),
         message,
     };
+    // A byte-order mark, as some editors write: not part of the format.
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     if !bytes.starts_with(b"$MeshFormat") {
         return Err(merr("not a Gmsh mesh file (no $MeshFormat header)".into()));
     }

@@ -472,3 +472,22 @@ fn an_empty_mesh_file_is_named() {
         "{e}"
     );
 }
+
+/// A mesh path that is not a regular file is refused before it is read (`/dev/zero` was read until
+/// memory ran out), and a byte-order mark before `$MeshFormat` is skipped.
+#[test]
+fn a_mesh_that_is_not_a_file_is_refused_and_a_byte_order_mark_is_skipped() {
+    let d = temp_dir("not-a-file");
+    let e = gmsh::read_msh(&d).expect_err("a folder");
+    assert!(e.to_string().contains("not a regular file"), "{e}");
+    #[cfg(unix)]
+    {
+        let e = gmsh::read_msh(Path::new("/dev/zero")).expect_err("a device");
+        assert!(e.to_string().contains("not a regular file"), "{e}");
+    }
+    let plain = gmsh::parse_msh(msh(4, &TET).as_bytes(), Path::new("m.msh")).expect("plain");
+    let marked = [b"\xEF\xBB\xBF".as_slice(), msh(4, &TET).as_bytes()].concat();
+    let marked = gmsh::parse_msh(&marked, Path::new("m.msh")).expect("with a byte-order mark");
+    assert_eq!(plain.nodes, marked.nodes);
+    assert!(plain.elements == marked.elements);
+}
