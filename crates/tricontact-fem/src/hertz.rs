@@ -137,6 +137,10 @@ fn invalid(message: String) -> FemError {
     FemError::Invalid(vec![format!("[hertz] {message}")])
 }
 
+/// How many model sizes (the diagonal of the mesh's bounding box) a `centre` may lie from the mesh, and a
+/// `radius` may reach.
+const FAR: f64 = 1e6;
+
 impl HertzSetup {
     /// Resolves the table against the analysis.
     ///
@@ -192,6 +196,25 @@ impl HertzSetup {
             return Err(invalid(format!(
                 "needs radius > 0, modulus > 0, a non-zero axis and symmetry ≥ 1 (got radius {}, modulus {modulus}, |axis| {norm}, symmetry {})",
                 def.radius, def.symmetry
+            )));
+        }
+        // A unit slip (metres for millimetres, or worse) shows as a centre or radius far outside
+        // the model; at 10³⁰⁰ the distances from the axis overflowed.
+        let (low, high) = an.mesh.bounding_box();
+        let size = an.mesh.size();
+        let outside = (0..3)
+            .map(|i| (low[i] - def.centre[i]).max(def.centre[i] - high[i]))
+            .fold(0.0, f64::max);
+        if outside > FAR * size {
+            return Err(invalid(format!(
+                "centre {:?} is more than {FAR:e} model sizes ({size:e}) from the mesh: is it in the mesh's units?",
+                def.centre
+            )));
+        }
+        if def.radius > FAR * size {
+            return Err(invalid(format!(
+                "radius {:e} exceeds {FAR:e} model sizes ({size:e}): is it in the mesh's units?",
+                def.radius
             )));
         }
         Ok(Self {

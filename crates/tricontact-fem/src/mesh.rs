@@ -155,9 +155,9 @@ impl Mesh {
             .join(", ")
     }
 
-    /// Characteristic length: the diagonal of the bounding box.
+    /// The smallest and largest coordinates of the nodes (`+∞` and `−∞` without nodes).
     #[must_use]
-    pub fn size(&self) -> f64 {
+    pub fn bounding_box(&self) -> ([f64; 3], [f64; 3]) {
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
         for p in &self.nodes {
@@ -166,9 +166,16 @@ impl Mesh {
                 hi[i] = hi[i].max(p[i]);
             }
         }
+        (lo, hi)
+    }
+
+    /// Characteristic length: the diagonal of the bounding box.
+    #[must_use]
+    pub fn size(&self) -> f64 {
         if self.nodes.is_empty() {
             return 0.0;
         }
+        let (lo, hi) = self.bounding_box();
         ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt()
     }
 

@@ -122,3 +122,24 @@ fn hertz_fine_meets_the_targets() {
         );
     }
 }
+
+/// A `centre` or `radius` far outside the model's scale (a unit slip) is refused by name: a centre
+/// at 10³⁰⁰ made every distance from the axis infinite in `hertz_profile.csv`.
+#[test]
+fn a_centre_or_radius_far_outside_the_model_is_refused() {
+    let (m, an) = common::example("hertz", "penalty.toml", Some("hertz-coarse.msh"));
+    let def = m.hertz.expect("[hertz]");
+    tricontact_fem::hertz::HertzSetup::resolve(&def, &an).expect("the example's table resolves");
+    let mut far = def.clone();
+    far.centre = [1e300, 0.0, 0.0];
+    let e = tricontact_fem::hertz::HertzSetup::resolve(&far, &an).expect_err("far centre");
+    assert!(
+        e.to_string()
+            .contains("centre [1e300, 0.0, 0.0] is more than"),
+        "{e}"
+    );
+    let mut huge = def;
+    huge.radius = 1e300;
+    let e = tricontact_fem::hertz::HertzSetup::resolve(&huge, &an).expect_err("huge radius");
+    assert!(e.to_string().contains("radius 1e300 exceeds"), "{e}");
+}
