@@ -181,8 +181,8 @@ impl IncrementControl {
         } else {
             let k = self.cutbacks_here - 1;
             format!(
-                "after {k} cutback{}, at the smallest increment max_cutbacks = {n} allows: 1/2^{n} \
-                 of the initial one",
+                "after {k} cutback{} of this increment, which is already the smallest \
+                 max_cutbacks = {n} allows: 1/2^{n} of the initial one",
                 if k == 1 { "" } else { "s" }
             )
         }
@@ -485,8 +485,8 @@ mod tests {
         );
         assert_eq!(
             c.exhausted(),
-            "after 0 cutbacks, at the smallest increment max_cutbacks = 2 allows: 1/2^2 of the \
-             initial one"
+            "after 0 cutbacks of this increment, which is already the smallest max_cutbacks = 2 \
+             allows: 1/2^2 of the initial one"
         );
         let mut c = IncrementControl::new(4, 2);
         assert!(c.failed() && c.failed());
