@@ -326,7 +326,15 @@ impl Analysis {
             match steps_opt {
                 None => vec![true; steps.len()],
                 Some(names) => {
-                    for n in names {
+                    if names.is_empty() {
+                        problems.push(invalid(format!(
+                            "{what}: `steps = []` names no step, so it would never act (omit `steps` for every step)"
+                        )));
+                    }
+                    for (i, n) in names.iter().enumerate() {
+                        if names[..i].contains(n) {
+                            problems.push(invalid(format!("{what}: step '{n}' is listed twice")));
+                        }
                         if !steps.iter().any(|s| &s.name == n) {
                             problems.push(invalid(format!(
                                 "{what}: unknown step '{n}' (steps: {})",

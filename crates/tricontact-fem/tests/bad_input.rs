@@ -491,3 +491,21 @@ fn a_mesh_that_is_not_a_file_is_refused_and_a_byte_order_mark_is_skipped() {
     assert_eq!(plain.nodes, marked.nodes);
     assert!(plain.elements == marked.elements);
 }
+
+/// A `steps` list that names no step, or one step twice, is named (the first made a load or a
+/// support that never acts, silently).
+#[test]
+fn empty_or_repeated_step_lists_are_named() {
+    let extra = "[[boundary]]\ngroup = \"solid\"\nfix = [\"x\", \"y\", \"z\"]\nsteps = []\n[[load]]\ngroup = \"solid\"\nforce = [1.0, 0.0, 0.0]\nsteps = [\"a\", \"a\"]\n";
+    let text = model_text("solid", extra) + "name = \"a\"\n";
+    let p = setup("steps-lists", &msh(4, &TET), &text);
+    let msg = load_analysis(&p).expect_err("steps").to_string();
+    assert!(
+        msg.contains("boundary 'solid': `steps = []` names no step, so it would never act"),
+        "{msg}"
+    );
+    assert!(
+        msg.contains("load 'solid': step 'a' is listed twice"),
+        "{msg}"
+    );
+}
