@@ -359,7 +359,15 @@ impl Analysis {
             if !valid {
                 problems.push(invalid(format!(
                     "material '{}': need 1e-100 < E < 1e100 and -1 < nu < 0.5 (got E = {:e}, nu = {})",
-                    m.name, m.e, m.nu
+                    m.name,
+                    m.e,
+                    // Plain for the usual values, in exponent form for absurd ones (1e300 was
+                    // printed with its 301 digits).
+                    if m.nu.abs() < 1e6 {
+                        m.nu.to_string()
+                    } else {
+                        format!("{:e}", m.nu)
+                    }
                 )));
             }
             if mat_index.insert(m.name.clone(), materials.len()).is_some() {
