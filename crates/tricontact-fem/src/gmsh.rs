@@ -117,6 +117,9 @@ fn kind_of(t: ElementType) -> Option<ElementKind> {
     })
 }
 
+/// Largest coordinate magnitude accepted: element volumes (cubes of lengths) stay finite.
+pub const MAX_COORDINATE: f64 = 1e100;
+
 /// Parses the bytes of a `.msh` file (`path` is used in messages only).
 ///
 /// # Errors
@@ -220,6 +223,13 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<Mesh> {
                 if !x.iter().all(|c| c.is_finite()) {
                     return Err(merr(format!(
                         "node {tag} has a non-finite coordinate ({}, {}, {})",
+                        x[0], x[1], x[2]
+                    )));
+                }
+                // Volumes are cubes of lengths: beyond this they overflow.
+                if x.iter().any(|c| c.abs() > MAX_COORDINATE) {
+                    return Err(merr(format!(
+                        "node {tag} has a coordinate beyond ±{MAX_COORDINATE:e} ({:e}, {:e}, {:e})",
                         x[0], x[1], x[2]
                     )));
                 }

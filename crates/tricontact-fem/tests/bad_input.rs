@@ -510,3 +510,17 @@ fn empty_or_repeated_step_lists_are_named() {
         "{msg}"
     );
 }
+
+/// A coordinate so large that element volumes overflow is named with its node (the element was
+/// reported as of zero or NaN volume instead).
+#[test]
+fn an_overflowing_coordinate_names_its_node() {
+    let mut nodes = TET;
+    nodes[2][1] = 1e300;
+    let e = gmsh::parse_msh(msh(4, &nodes).as_bytes(), Path::new("m.msh")).expect_err("huge");
+    assert!(
+        e.to_string()
+            .contains("node 3 has a coordinate beyond ±1e100"),
+        "{e}"
+    );
+}
