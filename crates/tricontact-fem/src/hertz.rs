@@ -137,8 +137,8 @@ fn invalid(message: String) -> FemError {
     FemError::Invalid(vec![format!("[hertz] {message}")])
 }
 
-/// How many model sizes (the diagonal of the mesh's bounding box) a `centre` may lie from the mesh, and a
-/// `radius` may reach.
+/// How many model sizes (the diagonal of the mesh's bounding box) a `centre` may lie from the
+/// mesh, and a `radius` may reach.
 const FAR: f64 = 1e6;
 
 impl HertzSetup {
