@@ -354,7 +354,10 @@ impl Analysis {
         // Materials.
         let mut materials = Vec::new();
         let mut mat_index = HashMap::new();
-        for m in &model.materials {
+        for (i, m) in model.materials.iter().enumerate() {
+            if m.name.trim().is_empty() {
+                problems.push(invalid(format!("material {}: the name is empty", i + 1)));
+            }
             let valid = m.e > 1.0 / MAX_MODULUS && m.e < MAX_MODULUS && m.nu > -1.0 && m.nu < 0.5;
             if !valid {
                 problems.push(invalid(format!(

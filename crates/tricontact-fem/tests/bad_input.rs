@@ -242,7 +242,8 @@ fn values_that_would_give_nan_or_never_end_are_rejected_by_key() {
                  [[boundary]]\ngroup = \"solid\"\ndisplacement = { x = 2.0 }\n\
                  [output]\nfolder = \"\"\n";
     let text = model_text("solid", extra).replace("E = 1.0", "E = inf") + steps;
-    let text = text.replacen("nu = 0.3", "nu = 1e300", 1);
+    let text = text.replacen("nu = 0.3", "nu = 1e300", 1)
+        + "[[material]]\nname = \" \"\ntype = \"linear_elastic\"\nE = 1.0\nnu = 0.3\n";
     let p = setup("nan", &msh(4, &TET), &text);
     let msg = load_analysis(&p).expect_err("invalid").to_string();
     for expected in [
@@ -258,6 +259,7 @@ fn values_that_would_give_nan_or_never_end_are_rejected_by_key() {
         "step 'a': residual_tolerance must be > 0 and < 1 (got 0)",
         "step 'a': increments must be from 1 to 1000000 (got 0)",
         "step 3: the name is empty",
+        "material 3: the name is empty",
         "boundaries 1 ('solid') and 2 ('solid') prescribe different values on 4 node component(s), the first at node",
         "output.folder is empty",
     ] {
