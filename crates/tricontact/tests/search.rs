@@ -1048,3 +1048,44 @@ proptest! {
         bumpy_grid_at_every_scale(seed, 10f64.powi(size), offset);
     }
 }
+
+/// A node lying on a thin but valid facet is found on it, by the tree, its lanes and a search
+/// radius smaller than the facet (the kernel had put it 0.025 away, farther than a corner, and the
+/// tree found nothing within 0.01).
+#[test]
+fn a_node_on_a_thin_facet_is_found_on_it() {
+    let nodes = vec![
+        Vec3::new(
+            -0.225_062_636_640_116_72,
+            0.344_898_195_781_236_9,
+            0.117_998_977_377_701_82,
+        ),
+        Vec3::new(
+            0.090_689_327_445_135_36,
+            0.297_458_679_817_029,
+            0.444_811_831_736_454_67,
+        ),
+        Vec3::new(
+            -0.559_995_083_590_138_9,
+            0.395_219_449_314_989_2,
+            -0.228_666_256_326_117_73,
+        ),
+    ];
+    let p = Vec3::new(
+        -0.208_839_643_008_735_73,
+        0.342_460_805_195_343_33,
+        0.134_790_267_687_056_1,
+    );
+    let surface = Surface::new(vec![[0, 1, 2]], 3).unwrap();
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    assert!(bvh.degenerate_facets().is_empty(), "a valid facet");
+    let hit = bvh
+        .closest(&surface, &Query::point(p), 0.01)
+        .expect("found");
+    assert!(hit.closest.distance < 1e-9, "{}", hit.closest.distance);
+    let all = bvh.closest_all(&surface, &[Query::point(p); 9], 0.01);
+    assert!(
+        all.iter()
+            .all(|h| h.is_some_and(|h| h.closest.distance < 1e-9))
+    );
+}

@@ -7,6 +7,14 @@
 //! is always assigned the lower-dimensional feature, deterministically. The closest point and its
 //! barycentric coordinates are returned with the feature.
 //!
+//! The sub-areas that decide the edges and the face are, by Lagrange's identity, both products of
+//! those dot products (`d1 d4 − d3 d2`, …: cheap) and triple products with the normal
+//! `n·(ab × ap)`, … (exact to `ε / sin` where the products are exact to `ε / sin²`, `sin` that of
+//! the angle at `a`). A facet with `sin² < 10⁻⁴` ([`THIN`]) takes the triple products: on a valid
+//! sliver of sine 10⁻⁸ the products had put a point lying on the facet 2.5 % of its size away,
+//! farther than a corner, and the search missed the contact; with the triple products the error
+//! stays within 13 `ε / sin` of the facet's size (the precision to which its plane is known).
+//!
 //! Edges are numbered from their first node: edge 0 = i–j, edge 1 = j–k, edge 2 = k–i.
 
 use crate::facet::Facet;
@@ -134,24 +142,58 @@ fn region_relative(ab: &Vec3, ac: &Vec3, ap: &Vec3) -> (Feature, [f64; 3]) {
     if d6 >= 0.0 && d5 <= d6 {
         return (Feature::Vertex(2), [0.0, 0.0, 1.0]);
     }
-    // Twice the signed areas of the sub-triangles opposite c, b and a, scaled by |w|.
-    let vc = d1 * d4 - d3 * d2;
+    // Twice the signed areas of the sub-triangles opposite a, b and c, scaled by |w|.
+    let [va, vb, vc] = if is_thin([d1, d2, d3, d4, d6]) {
+        sub_areas_by_normal(ab, ac, ap)
+    } else {
+        [d3 * d6 - d5 * d4, d5 * d2 - d1 * d6, d1 * d4 - d3 * d2]
+    };
     if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
         let t = d1 / (d1 - d3);
         return (Feature::Edge(0), [1.0 - t, t, 0.0]);
     }
-    let va = d3 * d6 - d5 * d4;
     if va <= 0.0 && d4 >= d3 && d5 >= d6 {
         let t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
         return (Feature::Edge(1), [0.0, 1.0 - t, t]);
     }
-    let vb = d5 * d2 - d1 * d6;
     if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
         let t = d2 / (d2 - d6);
         return (Feature::Edge(2), [1.0 - t, 0.0, t]);
     }
     let inv = 1.0 / (va + vb + vc);
     (Feature::Face, [va * inv, vb * inv, vc * inv])
+}
+
+/// Below this `sin²` of the angle at `a` (`1 − (ab·ac)² / (|ab|² |ac|²)`), a facet is thin: its
+/// sub-areas are computed from its normal ([`sub_areas_by_normal`]).
+pub(crate) const THIN: f64 = 1e-4;
+
+/// Whether the facet is thin (see [`THIN`]), from the region's dot products: `|ab|² = d1 − d3`,
+/// `|ac|² = d2 − d6` and `ab·ac = d2 − d4`. The products `d1 d4 − d3 d2` and the like are the
+/// sub-areas times `|w|²` up to a rounding of `ε |ab|² |ac|²`, that is `ε / sin²` of their size:
+/// all of it once the sine nears 10⁻⁸. The same operations serve the lanes (`search::lanes`), so
+/// that both choose alike, bit for bit.
+#[inline(always)]
+pub(crate) fn is_thin([d1, d2, d3, d4, d6]: [f64; 5]) -> bool {
+    let (ab2, ac2, abac) = (d1 - d3, d2 - d6, d2 - d4);
+    let lengths = ab2 * ac2;
+    // Not `gram < THIN · lengths`, so that a NaN counts as thin (and is recomputed).
+    !(lengths - abac * abac >= THIN * lengths)
+}
+
+/// Twice the signed sub-areas opposite `a`, `b` and `c`, times `|w|`, as triple products with the
+/// normal `w = ab × ac`: `n·(bp × cp)`, `n·(ap × ac)`, `n·(ab × ap)` (equal to the products of dot
+/// products by Lagrange's identity). The cross products of nearly parallel edges are exact to
+/// `ε |ab| |ac|`, so the sub-areas are exact to `ε / sin` of their size instead of `ε / sin²`.
+#[inline(never)]
+fn sub_areas_by_normal(ab: &Vec3, ac: &Vec3, ap: &Vec3) -> [f64; 3] {
+    let n = ab.cross(ac);
+    let (bp, cp) = (ap - ab, ap - ac);
+    [
+        n.dot(&bp.cross(&cp)),
+        n.dot(&ap.cross(ac)),
+        n.dot(&ab.cross(ap)),
+    ]
 }
 
 /// Squared distance from `p` to the triangle `(a, b, c)`: the quantity the contact search compares

@@ -10,8 +10,10 @@
 //! candidate and selects by the same priority, without branches, one vector [`V`] per quantity.
 //! The results are bit for bit those of the scalar kernel (no fused multiply–add on either side):
 //! the tree compares exactly the numbers the brute-force search compares. A lane whose selected
-//! coordinates are not finite (extreme coordinates, where the scalar kernel rescales) is
-//! recomputed with the scalar kernel. One body ([`region`]) serves both uses.
+//! coordinates are not finite (extreme coordinates, where the scalar kernel rescales), or whose
+//! facet is thin (`closest::point_triangle::is_thin`, by the same operations: the scalar kernel
+//! then takes the sub-areas from the facet's normal), is recomputed with the scalar kernel. One
+//! body ([`region`]) serves both uses.
 //!
 //! # Lane width
 //! One measurement is one machine register per quantity: eight lanes (`wide::f64x8`) where the
@@ -42,6 +44,7 @@ use wide::f64x4 as Vector;
 ))]
 use wide::f64x8 as Vector;
 
+use crate::closest::point_triangle::THIN;
 use crate::closest::{
     ClosestPoint, Feature, closest_point_and_distance_squared, closest_point_on_triangle,
     distance_squared_to_triangle,
@@ -138,7 +141,12 @@ pub(crate) fn region(a: &[V; 3], b: &[V; 3], c: &[V; 3], pl: &[V; 3]) -> Region 
     // |p − (a N_a + b N_b + c N_c)|², summed as nalgebra sums it.
     let point: [V; 3] = std::array::from_fn(|d| a[d] * n[0] + b[d] * n[1] + c[d] * n[2]);
     let diff = sub(pl, &point);
-    let bad = (!(n[0].is_finite() & n[1].is_finite() & n[2].is_finite())).to_bitmask();
+    // A thin facet (the scalar kernel's test, operation for operation) is measured by the scalar
+    // kernel, which computes its sub-areas from its normal.
+    let (ab2, ac2, abac) = (d1 - d3, d2 - d6, d2 - d4);
+    let lengths = ab2 * ac2;
+    let thin = !(lengths - abac * abac).simd_ge(V::splat(THIN) * lengths);
+    let bad = (thin | !(n[0].is_finite() & n[1].is_finite() & n[2].is_finite())).to_bitmask();
     Region {
         n,
         point,
@@ -784,9 +792,11 @@ mod tests {
         let c = Vec3::new(0.0, 1.0, 0.0);
         let facets = [
             [a, b, c],
-            [a, b, 2.0 * b], // collinear
-            [a, a, c],       // two corners coincide
-            [b, b, b],       // a point
+            [a, b, 2.0 * b],                         // collinear
+            [a, a, c],                               // two corners coincide
+            [b, b, b],                               // a point
+            [a, b, Vec3::new(0.5, 1e-7, 0.0)], // a valid sliver: measured by the scalar kernel
+            [a, Vec3::new(1e-3, 0.0, 0.0), 5.0 * c], // a needle with a right angle
         ];
         let mut points = vec![
             a,
@@ -805,6 +815,13 @@ mod tests {
             check(&facets[1..3], p);
             cases.extend(facets.iter().map(|f| (*f, *p)));
         }
+        // The sliver's lanes are the scalar kernel's (its sub-areas from the normal).
+        let thin = |[a, b, c]: [Vec3; 3], p: Vec3| {
+            let v = |x: &Vec3| -> [V; 3] { std::array::from_fn(|d| V::splat(x[d])) };
+            region(&v(&a), &v(&b), &v(&c), &v(&p)).bad != 0
+        };
+        assert!(thin(facets[4], (a + b) / 2.0));
+        assert!(!thin(facets[0], (a + b) / 2.0));
         // Non-finite coordinates go through the scalar kernel's rescaling.
         let huge = [[
             a,
