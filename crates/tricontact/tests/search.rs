@@ -332,6 +332,35 @@ fn bad_surfaces_are_errors() {
     ));
     let message = too_many.err().map(|e| e.to_string()).unwrap_or_default();
     assert!(message.contains(&MAX_FACETS.to_string()), "{message}");
+    // A node count no 32-bit index reaches is refused, not allocated (it aborted or overflowed).
+    for nodes in [usize::MAX, 1 << 40] {
+        assert!(matches!(
+            Surface::new(vec![], nodes),
+            Err(SurfaceError::TooManyNodes { nodes: n }) if n == nodes
+        ));
+    }
+    // Negative or NaN lengths are refused: the inflation, the skin.
+    for bad in [-0.05, f64::NAN] {
+        let e = Bvh::build(&surface, &[Vec3::zeros(); 3], bad).err();
+        assert!(
+            matches!(
+                e,
+                Some(SurfaceError::BadLength {
+                    name: "inflation",
+                    ..
+                })
+            ),
+            "{e:?}"
+        );
+    }
+    let bvh = Bvh::build(&surface, &[Vec3::zeros(); 3], 0.0).unwrap();
+    for bad in [-0.05, f64::NAN, f64::INFINITY] {
+        let e = Neighbourhoods::new(&bvh, &surface, &[Vec3::zeros(); 3], &[], bad).err();
+        assert!(
+            matches!(e, Some(SurfaceError::BadLength { name: "skin", .. })),
+            "{e:?}"
+        );
+    }
     // An empty surface answers nothing.
     let empty = Surface::new(vec![], 0).unwrap();
     let bvh = Bvh::build(&empty, &[], 0.0).unwrap();
@@ -1088,4 +1117,41 @@ fn a_node_on_a_thin_facet_is_found_on_it() {
         all.iter()
             .all(|h| h.is_some_and(|h| h.closest.distance < 1e-9))
     );
+}
+
+/// Nothing is within a negative or NaN search distance, for the tree, brute force, `within` and the
+/// incremental search alike (a negative one searched as far as its magnitude; a NaN one gave the
+/// incremental search answers the tree did not give).
+#[test]
+fn negative_and_nan_search_distances_find_nothing() {
+    let (nodes, facets) = grid(4, 0.25);
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let mut bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    let queries: Vec<Query> = (0..20)
+        .map(|i| Query::point(Vec3::new(0.05 * f64::from(i), 0.3, 0.02)))
+        .collect();
+    let lists = Neighbourhoods::new(&bvh, &surface, &nodes, &queries, 0.1).unwrap();
+    for limit in [-0.05, -f64::INFINITY, f64::NAN] {
+        for q in &queries {
+            assert!(bvh.closest(&surface, q, limit).is_none(), "{limit}");
+            assert!(brute_force_closest(&surface, &nodes, q, limit).is_none());
+            assert!(bvh.within(&surface, q, limit).is_empty());
+        }
+        assert!(
+            bvh.closest_all(&surface, &queries, limit)
+                .iter()
+                .all(Option::is_none)
+        );
+        let answers = lists
+            .closest_all(&mut bvh, &surface, &nodes, &queries, limit)
+            .unwrap()
+            .0;
+        assert!(answers.iter().all(Option::is_none), "{limit}");
+    }
+    // And everything is within an infinite one, by every path.
+    let all = lists
+        .closest_all(&mut bvh, &surface, &nodes, &queries, f64::INFINITY)
+        .unwrap()
+        .0;
+    assert!(all.iter().all(Option::is_some));
 }

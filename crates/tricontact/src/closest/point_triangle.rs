@@ -69,9 +69,10 @@ pub fn closest_point(facet: &Facet, p: &Vec3) -> ClosestPoint {
 }
 
 /// The closest point of the triangle `(a, b, c)` to node `p`, with its feature, without building a
-/// [`Facet`]: the form the contact search calls on every candidate. For a degenerate triangle the
-/// result is still a closest point (of the segment or point it collapses to); the search skips such
-/// facets before it gets here.
+/// [`Facet`]: the form the contact search calls on every candidate. For a degenerate triangle (two
+/// corners coinciding, or all three on a line) the result is finite but need not be the closest
+/// point of the segment or point it collapses to; [`Facet::new`] refuses such triangles and the
+/// search skips them (with a report) before it gets here.
 #[must_use]
 #[inline]
 pub fn closest_point_on_triangle(a: &Vec3, b: &Vec3, c: &Vec3, p: &Vec3) -> ClosestPoint {
@@ -177,8 +178,9 @@ pub(crate) const THIN: f64 = 1e-4;
 pub(crate) fn is_thin([d1, d2, d3, d4, d6]: [f64; 5]) -> bool {
     let (ab2, ac2, abac) = (d1 - d3, d2 - d6, d2 - d4);
     let lengths = ab2 * ac2;
-    // Not `gram < THIN · lengths`, so that a NaN counts as thin (and is recomputed).
-    !(lengths - abac * abac >= THIN * lengths)
+    let (gram, floor) = (lengths - abac * abac, THIN * lengths);
+    // A NaN counts as thin (and is recomputed): the lanes test `!(gram ≥ floor)`.
+    gram < floor || gram.is_nan() || floor.is_nan()
 }
 
 /// Twice the signed sub-areas opposite `a`, `b` and `c`, times `|w|`, as triple products with the

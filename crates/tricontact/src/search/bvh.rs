@@ -85,12 +85,20 @@ impl Bvh {
     /// (the search distance, in the model's length unit; `0` is fine for closest-facet queries).
     ///
     /// # Errors
-    /// [`SurfaceError::PositionCount`] if `positions` misses nodes of the surface.
+    /// [`SurfaceError::PositionCount`] if `positions` misses nodes of the surface;
+    /// [`SurfaceError::BadLength`] for a negative or NaN inflation (a negative one shrank the
+    /// boxes and lost facets).
     pub fn build(
         surface: &Surface,
         positions: &[Vec3],
         inflation: f64,
     ) -> Result<Self, SurfaceError> {
+        if inflation.is_nan() || inflation < 0.0 {
+            return Err(SurfaceError::BadLength {
+                name: "inflation",
+                value: inflation,
+            });
+        }
         surface.check_positions(positions)?;
         let (centers, degenerate) = facet_centers(surface, positions);
         Ok(Self::from_centers(

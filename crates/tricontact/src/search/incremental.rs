@@ -121,7 +121,7 @@ use crate::search::direction::Direction;
 use crate::search::lanes::{self, PAIRS, Pairs, V};
 use crate::search::layout::index;
 use crate::search::node::{Child, as_leaf, round_down};
-use crate::search::query::{HINT_CHUNK, TIE_MARGIN, check_answers, farthest_first};
+use crate::search::query::{HINT_CHUNK, TIE_MARGIN, check_answers, farthest_first, squared_limit};
 use crate::search::query::{Hit, Query};
 use crate::search::screen::{Bounds, Limits, Listed, NEAR, Stage};
 use crate::search::surface::{Surface, SurfaceError};
@@ -322,7 +322,9 @@ impl Neighbourhoods {
     ///
     /// # Errors
     /// [`SurfaceError::PositionCount`] if `positions` misses nodes of the surface;
-    /// [`SurfaceError::ListsTooLong`] if the lists exceed 2³² entries.
+    /// [`SurfaceError::ListsTooLong`] if the lists exceed 2³² entries;
+    /// [`SurfaceError::BadLength`] for a skin that is negative, NaN or infinite (a NaN skin made
+    /// empty lists that certified wrong answers).
     pub fn new(
         bvh: &Bvh,
         surface: &Surface,
@@ -330,6 +332,12 @@ impl Neighbourhoods {
         queries: &[Query],
         skin: f64,
     ) -> Result<Self, SurfaceError> {
+        if !(skin >= 0.0 && skin.is_finite()) {
+            return Err(SurfaceError::BadLength {
+                name: "skin",
+                value: skin,
+            });
+        }
         Self::within_offsets(bvh, surface, positions, queries, skin, MAX_OFFSET)
     }
 
@@ -577,7 +585,7 @@ impl Neighbourhoods {
             positions,
             moves: &moves,
             delta,
-            max2: max_distance * max_distance,
+            max2: squared_limit(max_distance),
             valid: &valid,
             sound: delta < self.robust,
         };
@@ -691,7 +699,8 @@ impl Neighbourhoods {
                 & !(screen.need[0] | screen.need[1]);
             measured += done.count_ones() as usize;
             let all = (1u32 << len) - 1;
-            let mut left = if shared.max2 < f64::INFINITY {
+            // Unless every distance is within (no limit), each answer is checked against it.
+            let mut left = if shared.max2 != f64::INFINITY {
                 all
             } else {
                 all & !done
@@ -702,7 +711,7 @@ impl Neighbourhoods {
                 let (bit, c, i) = (1u32 << k, g + k, first + g + k);
                 let (q, h) = (&queries[c], &self.heads[i]);
                 if done & bit != 0 {
-                    if d2[k] > shared.max2 {
+                    if outside_limit(d2[k], shared.max2) {
                         hits[c] = None;
                     }
                     continue;
@@ -765,7 +774,7 @@ impl Neighbourhoods {
                         && is_degenerate(&shared.surface.corners(h.facet, positions)))
                 {
                     fallbacks.push((i, Some(h.facet)));
-                } else if d2[k] > shared.max2 {
+                } else if outside_limit(d2[k], shared.max2) {
                     hits[c] = None;
                 }
             }
@@ -779,7 +788,7 @@ impl Neighbourhoods {
                 && is_degenerate(&shared.surface.corners(o.facet, positions));
             if o.fallback || degenerate {
                 fallbacks.push((first + c, Some(o.facet)));
-            } else if o.d2 > shared.max2 {
+            } else if outside_limit(o.d2, shared.max2) {
                 hits[c] = None;
             }
         }
@@ -942,6 +951,15 @@ impl Neighbourhoods {
         }
         (Ok(()), measured)
     }
+}
+
+/// `d2` is not within the squared search distance `max2` (a NaN on either side is beyond).
+#[inline(always)]
+fn outside_limit(d2: f64, max2: f64) -> bool {
+    !matches!(
+        d2.partial_cmp(&max2),
+        Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
+    )
 }
 
 /// What the bounds need of the listed facet whose entry is `e` and whose nodes moved by `m` since

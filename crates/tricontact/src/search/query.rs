@@ -159,7 +159,7 @@ impl Bvh {
     /// positions the tree was last built or updated with.
     #[must_use]
     pub fn closest(&self, surface: &Surface, q: &Query, max_distance: f64) -> Option<Hit> {
-        self.closest_candidate(surface, q, max_distance * max_distance, None)
+        self.closest_candidate(surface, q, squared_limit(max_distance), None)
             .map(|c| self.finish(c, q))
     }
 
@@ -177,7 +177,7 @@ impl Bvh {
         max_distance: f64,
     ) -> Option<Hit> {
         let seed = hint.and_then(|f| self.candidate(surface, q, f));
-        self.closest_candidate(surface, q, max_distance * max_distance, seed)
+        self.closest_candidate(surface, q, squared_limit(max_distance), seed)
             .map(|c| self.finish(c, q))
     }
 
@@ -333,7 +333,7 @@ impl Bvh {
         if !q.is_finite() {
             return hits;
         }
-        let r2 = radius * radius;
+        let r2 = squared_limit(radius);
         let bound = r2 * TIE_MARGIN;
         let mut stack = vec![self.root];
         while let Some(child) = stack.pop() {
@@ -414,7 +414,7 @@ impl Bvh {
         max_distance: f64,
         out: &mut [Option<Hit>],
     ) {
-        let max2 = max_distance * max_distance;
+        let max2 = squared_limit(max_distance);
         if !self.coherent(queries) {
             self.closest_reordered(surface, queries, max2, out);
             return;
@@ -465,6 +465,15 @@ pub fn sort_hits(hits: &mut [Hit]) {
     });
 }
 
+/// A search distance as the squared distances are compared with it: `d²`, or `−1` for a negative
+/// `d`, so that nothing is within a negative distance (as nothing is within NaN, which stays NaN;
+/// squaring would have made `−0.05` search as far as `0.05`).
+#[must_use]
+#[inline]
+pub(crate) fn squared_limit(d: f64) -> f64 {
+    if d < 0.0 { -1.0 } else { d * d }
+}
+
 /// The closest facet by checking every facet: the reference the tree is tested against, and the
 /// O(nodes × facets) search the benchmark compares with. Degenerate facets are skipped, as in the
 /// tree, and candidates are compared exactly as the tree compares them.
@@ -478,7 +487,7 @@ pub fn brute_force_closest(
     if !q.is_finite() {
         return None;
     }
-    let max2 = max_distance * max_distance;
+    let max2 = squared_limit(max_distance);
     let mut best = None;
     for f in 0..surface.len() {
         let facet = index(f);

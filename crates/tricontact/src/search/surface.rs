@@ -13,7 +13,7 @@ use thiserror::Error;
 pub const MAX_FACETS: usize = (1 << 27) - 1;
 
 /// Why a surface could not be built or searched.
-#[derive(Debug, Clone, PartialEq, Eq, Error)]
+#[derive(Debug, Clone, PartialEq, Error)]
 pub enum SurfaceError {
     /// A facet names a node that does not exist.
     #[error("facet {facet} refers to node {node}, but only {nodes} node positions were given")]
@@ -78,6 +78,21 @@ pub enum SurfaceError {
         /// The number of listed facets.
         entries: usize,
     },
+    /// A length parameter of the search (the boxes' inflation, the lists' skin) that is negative
+    /// or NaN (or, for the skin, infinite).
+    #[error("the {name} must be a length ≥ 0 (got {value})")]
+    BadLength {
+        /// Which parameter.
+        name: &'static str,
+        /// The value given.
+        value: f64,
+    },
+    /// More nodes than the facets' 32-bit node indices can name.
+    #[error("{nodes} nodes exceed the 2³² that the facets' 32-bit node indices can name")]
+    TooManyNodes {
+        /// The node count given.
+        nodes: usize,
+    },
     /// A facet names the same node twice.
     #[error("facet {facet} repeats node {node}")]
     RepeatedNode {
@@ -107,6 +122,11 @@ impl Surface {
             return Err(SurfaceError::TooLarge {
                 facets: facets.len(),
             });
+        }
+        // The adjacency has an entry per node: a count no index can reach would only exhaust
+        // memory (or overflow).
+        if node_count > 1 << 32 {
+            return Err(SurfaceError::TooManyNodes { nodes: node_count });
         }
         for (f, nodes) in facets.iter().enumerate() {
             for (k, &n) in nodes.iter().enumerate() {
