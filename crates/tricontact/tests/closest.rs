@@ -151,13 +151,7 @@ proptest! {
 /// than a corner, and the search missed the contact).
 #[test]
 fn thin_facets_have_accurate_closest_points() {
-    let mut seed = 0x2545_f491_4f6c_dd1du64;
-    let mut r = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut r = tricontact::search::scenes::uniform(17);
     let mut worst = 0.0f64;
     let mut cases = 0;
     for i in 0..20_000 {
