@@ -224,6 +224,16 @@ fn an_absurd_node_count_in_the_header_is_an_error() {
     let bad = good.replace("3 1 0 4\n", "3 1 0 9223372036854775807\n");
     let e = gmsh::parse_msh(bad.as_bytes(), Path::new("b.msh")).expect_err("block");
     assert!(matches!(e, FemError::Mesh { .. }), "{e}");
+    // The walk that recovers the node tags, on its own (the reader refuses these files before it
+    // runs): it gives up on them instead of reserving the header's count (which aborted the
+    // process) or overflowing on the block's.
+    let tags = |text: &str| tricontact_fem::gmsh_nodes::node_tags(text.as_bytes());
+    assert_eq!(tags(&good), Some(vec![1, 2, 3, 4]));
+    for count in ["999999999999999", "18446744073709551615"] {
+        let bad = good.replace("$Nodes\n1 4 1 4\n", &format!("$Nodes\n1 {count} 1 4\n"));
+        assert_eq!(tags(&bad), None, "{count}");
+    }
+    assert_eq!(tags(&bad), None, "block");
 }
 
 #[test]

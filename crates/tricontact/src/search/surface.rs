@@ -125,7 +125,7 @@ impl Surface {
         }
         // The adjacency has an entry per node: a count no index can reach would only exhaust
         // memory (or overflow).
-        if node_count > 1 << 32 {
+        if u64::try_from(node_count).is_ok_and(|n| n > 1 << 32) {
             return Err(SurfaceError::TooManyNodes { nodes: node_count });
         }
         for (f, nodes) in facets.iter().enumerate() {
