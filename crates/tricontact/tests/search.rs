@@ -1155,3 +1155,81 @@ fn negative_and_nan_search_distances_find_nothing() {
         .0;
     assert!(all.iter().all(Option::is_some));
 }
+
+/// Two bodies with surfaces of as many facets over as many nodes (the second body's nodes numbered
+/// after the first's): a tree or lists made on one and handed the other are refused, with an error
+/// where the call returns one and a panic naming the mix-up where it does not, instead of answers
+/// naming the other body's facets. A copy of the same surface is accepted.
+#[test]
+fn a_tree_or_lists_refuse_another_surface_of_the_same_size() {
+    let (mut nodes, facets) = grid(6, 0.5);
+    let n = u32::try_from(nodes.len()).unwrap();
+    let moved: Vec<Vec3> = nodes.iter().map(|x| x + Vec3::new(0.0, 0.0, 2.0)).collect();
+    nodes.extend(moved);
+    let second: Vec<[u32; 3]> = facets.iter().map(|f| f.map(|k| k + n)).collect();
+    let one = Surface::new(facets.clone(), nodes.len()).unwrap();
+    let other = Surface::new(second, nodes.len()).unwrap();
+    assert_eq!(
+        (one.len(), one.node_count()),
+        (other.len(), other.node_count())
+    );
+    let copy = Surface::new(facets, nodes.len()).unwrap();
+    let mut bvh = Bvh::build(&one, &nodes, 0.0).unwrap();
+    let queries = vec![Query::point(Vec3::new(1.0, 1.0, 0.3)); 3];
+    let other_surface = |e: SurfaceError| matches!(e, SurfaceError::OtherSurface { .. });
+    let mut out = vec![None; queries.len()];
+    let err = bvh
+        .closest_all_into(&other, &queries, 1.0, &mut out)
+        .unwrap_err();
+    assert!(
+        err.to_string()
+            .contains("search tree was made on another surface"),
+        "{err}"
+    );
+    assert!(other_surface(bvh.update(&other, &nodes).unwrap_err()));
+    assert!(other_surface(
+        Neighbourhoods::new(&bvh, &other, &nodes, &queries, 0.1).unwrap_err()
+    ));
+    let lists = Neighbourhoods::new(&bvh, &copy, &nodes, &queries, 0.1).unwrap();
+    let err = lists
+        .closest_all(&mut bvh, &other, &nodes, &queries, 1.0)
+        .unwrap_err();
+    assert!(
+        err.to_string().contains("neighbourhood lists was made"),
+        "{err}"
+    );
+    // A tree of the other surface with the lists of the first: refused too.
+    let mut other_bvh = Bvh::build(&other, &nodes, 0.0).unwrap();
+    assert!(other_surface(
+        lists
+            .closest_all(&mut other_bvh, &one, &nodes, &queries, 1.0)
+            .unwrap_err()
+    ));
+    // The same surface, or an equal copy, is searched as before.
+    let (hits, _) = lists
+        .closest_all(&mut bvh, &copy, &nodes, &queries, 1.0)
+        .unwrap();
+    assert_eq!(hits, bvh.closest_all(&one, &queries, 1.0));
+    assert_eq!(bvh.update(&copy, &nodes).unwrap(), Update::Refit);
+    for call in [
+        Box::new(|| {
+            let _ = bvh.closest(&other, &queries[0], 1.0);
+        }) as Box<dyn Fn()>,
+        Box::new(|| {
+            let _ = bvh.closest_with_hint(&other, &queries[0], Some(0), 1.0);
+        }),
+        Box::new(|| {
+            let _ = bvh.within(&other, &queries[0], 1.0);
+        }),
+        Box::new(|| {
+            let _ = bvh.closest_all(&other, &queries, 1.0);
+        }),
+    ] {
+        let panic = std::panic::catch_unwind(std::panic::AssertUnwindSafe(call)).unwrap_err();
+        let message = panic.downcast_ref::<String>().expect("a message");
+        assert!(
+            message.contains("search tree was made on another surface"),
+            "{message}"
+        );
+    }
+}

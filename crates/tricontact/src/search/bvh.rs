@@ -35,10 +35,13 @@ pub(crate) use crate::search::layout::index;
 use crate::search::layout::{depth, layout};
 use crate::search::leaves::leaf_starts;
 use crate::search::node::{Child, Node, WIDTH, as_leaf};
-use crate::search::surface::{Surface, SurfaceError};
+use crate::search::surface::{Surface, SurfaceError, SurfaceKey};
 
 /// A refit whose box area grows past this factor of the area at build triggers a rebuild.
 pub const REBUILD_RATIO: f64 = 1.5;
+
+/// What a tree names itself in [`SurfaceError::OtherSurface`].
+pub(crate) const TREE: &str = "search tree";
 
 /// The slot of a facet that is not in the tree.
 pub(crate) const NO_SLOT: u32 = u32::MAX;
@@ -78,6 +81,8 @@ pub struct Bvh {
     pub(crate) leaf_size: f64,
     inflation: f64,
     built_area: f64,
+    /// The surface the tree was built on (every call checks that it is given that one).
+    pub(crate) surface: SurfaceKey,
 }
 
 impl Bvh {
@@ -149,6 +154,7 @@ impl Bvh {
             leaf_size: 0.0,
             inflation,
             built_area: 0.0,
+            surface: surface.key(),
         };
         bvh.fill_rows(surface, positions);
         bvh.built_area = bvh.sweep();
@@ -212,12 +218,14 @@ impl Bvh {
     /// a facet's validity changed.
     ///
     /// # Errors
+    /// [`SurfaceError::OtherSurface`] if `surface` is not the one the tree was built on;
     /// [`SurfaceError::PositionCount`] if `positions` misses nodes of the surface.
     pub fn update(
         &mut self,
         surface: &Surface,
         positions: &[Vec3],
     ) -> Result<Update, SurfaceError> {
+        self.surface.check(surface, TREE)?;
         surface.check_positions(positions)?;
         let (centers, degenerate) = facet_centers(surface, positions);
         if degenerate == self.degenerate {

@@ -116,7 +116,7 @@ use rayon::prelude::*;
 use crate::closest::{ClosestPoint, closest_point_and_distance_squared};
 use crate::facet::{DEGENERACY_TOLERANCE, Facet};
 use crate::linalg::Vec3;
-use crate::search::bvh::{Bvh, Update};
+use crate::search::bvh::{Bvh, TREE, Update};
 use crate::search::direction::Direction;
 use crate::search::lanes::{self, PAIRS, Pairs, V};
 use crate::search::layout::index;
@@ -124,7 +124,7 @@ use crate::search::node::{Child, as_leaf, round_down};
 use crate::search::query::{HINT_CHUNK, TIE_MARGIN, check_answers, farthest_first, squared_limit};
 use crate::search::query::{Hit, Query};
 use crate::search::screen::{Bounds, Limits, Listed, NEAR, Stage};
-use crate::search::surface::{Surface, SurfaceError};
+use crate::search::surface::{Surface, SurfaceError, SurfaceKey};
 
 /// Below this distance, relative to the magnitude of the coordinates, a listed facet's direction
 /// is not stored (zero; its rounding error could exceed
@@ -209,6 +209,9 @@ struct ChunkLists {
 /// `1 / TABLE_COVER` of the facets (each facet is then in many lists); otherwise per listed facet.
 const TABLE_COVER: usize = 8;
 
+/// What the lists name themselves in [`SurfaceError::OtherSurface`].
+const LISTS: &str = "set of neighbourhood lists";
+
 /// The facet of an empty list.
 const NONE: u32 = u32::MAX;
 
@@ -228,8 +231,8 @@ fn list_offset(at: usize, limit: usize) -> Option<u32> {
 pub struct Neighbourhoods {
     /// Surface node positions when the lists were made (one per node of the surface).
     reference: Vec<Vec3>,
-    /// The surface's number of facets when the lists were made: every listed facet is below it.
-    facet_count: usize,
+    /// The surface the lists were made on (so every listed facet is one of its facets).
+    surface: SurfaceKey,
     /// One per query, and a last one that only closes the entries.
     heads: Vec<Head>,
     entries: Vec<Entry>,
@@ -255,7 +258,7 @@ struct Best {
 /// valid now.
 ///
 /// Built only by [`Neighbourhoods::closest_all_into`] once it has checked that the surface is the
-/// lists' (as many facets and nodes) and that `positions` has a position for each node. Every
+/// lists' (its key: as many facets and nodes, the same facets) and that `positions` has a position for each node. Every
 /// listed facet was read from the surface when the lists were made, so it is below the facet
 /// count, hence a facet of `surface`; each of its nodes indexes `positions` and `moves` (one per
 /// node). The hot paths read them without bounds checks on that ground (measured: 6 % less time
@@ -321,6 +324,7 @@ impl Neighbourhoods {
     /// `bvh` must be built or updated at `positions`.
     ///
     /// # Errors
+    /// [`SurfaceError::OtherSurface`] if `bvh` was built on another surface;
     /// [`SurfaceError::PositionCount`] if `positions` misses nodes of the surface;
     /// [`SurfaceError::ListsTooLong`] if the lists exceed 2³² entries;
     /// [`SurfaceError::BadLength`] for a skin that is negative, NaN or infinite (a NaN skin made
@@ -351,6 +355,7 @@ impl Neighbourhoods {
         skin: f64,
         limit: usize,
     ) -> Result<Self, SurfaceError> {
+        bvh.surface.check(surface, TREE)?;
         surface.check_positions(positions)?;
         // Each facet's robustness once (a facet is in about a dozen lists) when the queries cover
         // much of the surface; for a few queries on a large surface, per listed facet.
@@ -410,7 +415,7 @@ impl Neighbourhoods {
         });
         Ok(Self {
             reference: positions[..surface.node_count()].to_vec(),
-            facet_count: surface.len(),
+            surface: surface.key(),
             heads,
             entries,
             degenerate: bvh.degenerate_facets(),
@@ -522,9 +527,8 @@ impl Neighbourhoods {
     ///
     /// # Errors
     /// [`SurfaceError::PositionCount`] if `positions` misses nodes of the surface;
-    /// [`SurfaceError::OtherSurface`] if `surface` has another number of facets or nodes than
-    /// the one the lists were made on; [`SurfaceError::QueryCount`] if the number of queries
-    /// changed.
+    /// [`SurfaceError::OtherSurface`] if `surface` is not the one the lists were made on, or
+    /// `bvh` was built on another; [`SurfaceError::QueryCount`] if the number of queries changed.
     pub fn closest_all(
         &self,
         bvh: &mut Bvh,
@@ -555,14 +559,8 @@ impl Neighbourhoods {
         hits: &mut [Option<Hit>],
     ) -> Result<IncrementalStats, SurfaceError> {
         surface.check_positions(positions)?;
-        if surface.len() != self.facet_count || surface.node_count() != self.reference.len() {
-            return Err(SurfaceError::OtherSurface {
-                expected_facets: self.facet_count,
-                expected_nodes: self.reference.len(),
-                facets: surface.len(),
-                nodes: surface.node_count(),
-            });
-        }
+        self.surface.check(surface, LISTS)?;
+        bvh.surface.check(surface, TREE)?;
         if queries.len() != self.queries() {
             return Err(SurfaceError::QueryCount {
                 expected: self.queries(),

@@ -39,7 +39,7 @@ use rayon::prelude::*;
 use crate::closest::{ClosestPoint, closest_point_on_triangle, distance_squared_to_triangle};
 use crate::facet::Facet;
 use crate::linalg::Vec3;
-use crate::search::bvh::{Bvh, NO_SLOT, index};
+use crate::search::bvh::{Bvh, NO_SLOT, TREE, index};
 use crate::search::lanes;
 use crate::search::node::{Child, EMPTY, as_leaf};
 use crate::search::surface::{Surface, SurfaceError};
@@ -157,8 +157,12 @@ pub fn measure(surface: &Surface, positions: &[Vec3], facet: u32, q: &Query) -> 
 impl Bvh {
     /// The closest facet to `q` within `max_distance` (`f64::INFINITY` for no limit), at the
     /// positions the tree was last built or updated with.
+    ///
+    /// # Panics
+    /// If `surface` is not the one the tree was built on (its facets are read by number).
     #[must_use]
     pub fn closest(&self, surface: &Surface, q: &Query, max_distance: f64) -> Option<Hit> {
+        self.surface.expect(surface, TREE);
         self.closest_candidate(surface, q, squared_limit(max_distance), None)
             .map(|c| self.finish(c, q))
     }
@@ -168,6 +172,9 @@ impl Bvh {
     /// bounds the search from the first node, so fewer boxes pass; the answer is the same as
     /// without the hint (the bound is inclusive and ties still go to the lower index). A hint that
     /// is out of range, degenerate or excluded is ignored.
+    ///
+    /// # Panics
+    /// As [`Bvh::closest`].
     #[must_use]
     pub fn closest_with_hint(
         &self,
@@ -176,6 +183,7 @@ impl Bvh {
         hint: Option<u32>,
         max_distance: f64,
     ) -> Option<Hit> {
+        self.surface.expect(surface, TREE);
         let seed = hint.and_then(|f| self.candidate(surface, q, f));
         self.closest_candidate(surface, q, squared_limit(max_distance), seed)
             .map(|c| self.finish(c, q))
@@ -327,8 +335,12 @@ impl Bvh {
     }
 
     /// Every facet within `radius` of `q`, sorted by distance then facet index.
+    ///
+    /// # Panics
+    /// As [`Bvh::closest`].
     #[must_use]
     pub fn within(&self, surface: &Surface, q: &Query, radius: f64) -> Vec<Hit> {
+        self.surface.expect(surface, TREE);
         let mut hits = Vec::new();
         if !q.is_finite() {
             return hits;
@@ -376,6 +388,9 @@ impl Bvh {
     /// (neighbouring nodes one after the other) and leaves every answer unchanged. A large batch
     /// whose consecutive queries are far apart is answered in Z-order and the answers put back in
     /// the given order.
+    ///
+    /// # Panics
+    /// As [`Bvh::closest`] ([`Bvh::closest_all_into`] returns the error instead).
     #[must_use]
     pub fn closest_all(
         &self,
@@ -383,6 +398,7 @@ impl Bvh {
         queries: &[Query],
         max_distance: f64,
     ) -> Vec<Option<Hit>> {
+        self.surface.expect(surface, TREE);
         let mut out = vec![None; queries.len()];
         self.answer_all(surface, queries, max_distance, &mut out);
         out
@@ -393,6 +409,7 @@ impl Bvh {
     /// time, which costs as much as the search for millions of queries.
     ///
     /// # Errors
+    /// [`SurfaceError::OtherSurface`] if `surface` is not the one the tree was built on;
     /// [`SurfaceError::AnswerCount`] if `out` does not have one entry per query.
     pub fn closest_all_into(
         &self,
@@ -401,6 +418,7 @@ impl Bvh {
         max_distance: f64,
         out: &mut [Option<Hit>],
     ) -> Result<(), SurfaceError> {
+        self.surface.check(surface, TREE)?;
         check_answers(queries.len(), out.len())?;
         self.answer_all(surface, queries, max_distance, out);
         Ok(())

@@ -50,12 +50,15 @@ pub enum SurfaceError {
         /// Queries given.
         given: usize,
     },
-    /// An incremental search was given another surface than its lists were made on.
+    /// A search tree or neighbourhood lists were given another surface than the one they were made
+    /// on (other facet or node counts, or the same counts and other facets).
     #[error(
-        "the neighbourhood lists were made on a surface of {expected_facets} facets over {expected_nodes} nodes, but this one has {facets} facets over {nodes} nodes"
+        "the {made} was made on another surface (that one: {expected_facets} facets over {expected_nodes} nodes; this one: {facets} facets over {nodes} nodes)"
     )]
     OtherSurface {
-        /// Facets of the surface the lists were made on.
+        /// What was made on the other surface: "search tree" or "set of neighbourhood lists".
+        made: &'static str,
+        /// Facets of the surface it was made on.
         expected_facets: usize,
         /// Its nodes.
         expected_nodes: usize,
@@ -103,6 +106,65 @@ pub enum SurfaceError {
     },
 }
 
+/// What a search tree or neighbourhood lists keep of the surface they were made on: its facet
+/// and node counts and a 64-bit hash of its facets' node indices, in order. They index the
+/// surface's facets and nodes by number, so another surface, even one with the same counts (the
+/// surface of a second body), is refused rather than searched; a copy of the same surface (equal
+/// facets over as many nodes) is the same surface.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct SurfaceKey {
+    facets: usize,
+    nodes: usize,
+    hash: u64,
+}
+
+impl SurfaceKey {
+    /// `Ok` when `surface` is the one this key was taken from.
+    ///
+    /// # Errors
+    /// [`SurfaceError::OtherSurface`], naming `made` (what was made on the key's surface), when it
+    /// is not.
+    pub(crate) fn check(self, surface: &Surface, made: &'static str) -> Result<(), SurfaceError> {
+        if surface.key == self {
+            return Ok(());
+        }
+        Err(SurfaceError::OtherSurface {
+            made,
+            expected_facets: self.facets,
+            expected_nodes: self.nodes,
+            facets: surface.len(),
+            nodes: surface.node_count(),
+        })
+    }
+
+    /// As [`SurfaceKey::check`], for the calls that return no `Result`.
+    ///
+    /// # Panics
+    /// With the error's message when `surface` is not the key's.
+    #[track_caller]
+    pub(crate) fn expect(self, surface: &Surface, made: &'static str) {
+        if let Err(e) = self.check(surface, made) {
+            panic!("{e}");
+        }
+    }
+}
+
+/// The facets' hash: the wrapping sum over facets `f` of `mix(a | b << 32) ^ mix(c | f << 32)`
+/// for nodes `[a, b, c]`, with `mix` the 64-bit finalizer of MurmurHash3. Each facet's term is
+/// independent of the others (no chain of dependent multiplies through 10⁶ facets), and the
+/// facet's index in it makes the sum depend on the facets' order.
+fn facets_hash(facets: &[[u32; 3]]) -> u64 {
+    fn mix(mut z: u64) -> u64 {
+        z = (z ^ (z >> 33)).wrapping_mul(0xff51_afd7_ed55_8ccd);
+        z = (z ^ (z >> 33)).wrapping_mul(0xc4ce_b9fe_1a85_ec53);
+        z ^ (z >> 33)
+    }
+    (0u64..)
+        .zip(facets)
+        .map(|(f, &[a, b, c])| mix(u64::from(a) | u64::from(b) << 32) ^ mix(u64::from(c) | f << 32))
+        .fold(0, u64::wrapping_add)
+}
+
 /// Facets (node-index triples) with their node-sharing adjacency.
 #[derive(Debug, Clone)]
 pub struct Surface {
@@ -110,6 +172,7 @@ pub struct Surface {
     node_count: usize,
     adjacency_start: Vec<u32>,
     adjacency: Vec<u32>,
+    key: SurfaceKey,
 }
 
 impl Surface {
@@ -143,11 +206,17 @@ impl Surface {
             }
         }
         let (adjacency_start, adjacency) = adjacency(&facets, node_count);
+        let key = SurfaceKey {
+            facets: facets.len(),
+            nodes: node_count,
+            hash: facets_hash(&facets),
+        };
         Ok(Self {
             facets,
             node_count,
             adjacency_start,
             adjacency,
+            key,
         })
     }
 
@@ -177,6 +246,12 @@ impl Surface {
     #[inline]
     pub fn node_count(&self) -> usize {
         self.node_count
+    }
+
+    /// What a tree or lists made on this surface keep of it (see [`SurfaceKey`]).
+    #[inline]
+    pub(crate) fn key(&self) -> SurfaceKey {
+        self.key
     }
 
     /// Checks that `positions` covers every node of the surface.
