@@ -35,6 +35,14 @@ pub enum GeometryError {
         /// The distance found.
         distance: f64,
     },
+    /// A constraint names a node that has no position.
+    #[error("node {node} has no position: {nodes} node positions were given")]
+    MissingNode {
+        /// The node named.
+        node: u32,
+        /// How many node positions there are.
+        nodes: usize,
+    },
     /// The result overflowed `f64` (coordinates of wildly different magnitudes).
     #[error("floating-point overflow in the node–facet terms")]
     Overflow,

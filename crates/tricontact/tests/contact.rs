@@ -4,7 +4,7 @@
 use tricontact::contact::{Constraint, assemble_penalty, choose_facet};
 use tricontact::search::scenes::grid;
 use tricontact::search::{Bvh, Surface};
-use tricontact::{Vec3, penalty};
+use tricontact::{GeometryError, Vec3, penalty};
 
 /// A flat master grid (4 × 4 squares of size 1, normals +z) plus one slave node at `x`.
 fn flat_with_slave(x: Vec3) -> (Surface, Vec<Vec3>, u32) {
@@ -211,4 +211,37 @@ fn assembled_penalty_terms_match_finite_differences() {
             assert!((k[r * n + c] - k[c * n + r]).abs() <= 1e-12 * k_scale);
         }
     }
+}
+
+/// A constraint naming a node without a position is an error that names the node, and a slave node
+/// without a position a panic that names it, not an index out of bounds.
+#[test]
+fn nodes_without_positions_are_named() {
+    let (nodes, facets) = grid(2, 1.0);
+    let missing = u32::try_from(nodes.len()).unwrap() + 3;
+    let [a, b, c] = facets[0];
+    let constraints = [Constraint {
+        nodes: [a, b, c, missing],
+    }];
+    let err = assemble_penalty(&constraints, &nodes, 1e3).unwrap_err();
+    assert_eq!(
+        err,
+        GeometryError::MissingNode {
+            node: missing,
+            nodes: nodes.len()
+        }
+    );
+    assert!(
+        err.to_string().contains(&format!("node {missing}")),
+        "{err}"
+    );
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    let panic = std::panic::catch_unwind(|| choose_facet(&surface, &bvh, &nodes, missing, 0.5))
+        .unwrap_err();
+    let message = panic.downcast_ref::<String>().expect("a message");
+    assert!(
+        message.contains(&format!("slave node {missing} has no position")),
+        "{message}"
+    );
 }

@@ -27,10 +27,19 @@ impl Constraint {
     /// The evaluated pair at `positions`.
     ///
     /// # Errors
-    /// As [`NodeFacet::new`].
+    /// [`GeometryError::MissingNode`] for a node beyond `positions`; otherwise as
+    /// [`NodeFacet::new`].
     pub fn pair(&self, positions: &[Vec3]) -> Result<NodeFacet, GeometryError> {
-        let x = |k: usize| positions[self.nodes[k] as usize];
-        NodeFacet::new(x(0), x(1), x(2), x(3))
+        let mut x = [Vec3::zeros(); 4];
+        for (x, &node) in x.iter_mut().zip(&self.nodes) {
+            *x = *positions
+                .get(node as usize)
+                .ok_or(GeometryError::MissingNode {
+                    node,
+                    nodes: positions.len(),
+                })?;
+        }
+        NodeFacet::new(x[0], x[1], x[2], x[3])
     }
 }
 
@@ -50,7 +59,8 @@ pub struct PenaltyAssembly {
 /// Penalty force and tangent of `constraints` at `positions` with penalty factor `alpha`.
 ///
 /// # Errors
-/// The first [`GeometryError`] met (a degenerate facet), with nothing half-assembled returned.
+/// The first [`GeometryError`] met (a degenerate facet, a node without a position), with nothing
+/// half-assembled returned.
 pub fn assemble_penalty(
     constraints: &[Constraint],
     positions: &[Vec3],

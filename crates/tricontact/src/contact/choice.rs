@@ -38,6 +38,9 @@ pub const PROJECTION_TOLERANCE: f64 = 1e-9;
 ///
 /// `bvh` must have been built or updated with `positions`. The slave node is excluded from its own
 /// facets (self-contact).
+///
+/// # Panics
+/// If `slave` has no position, or `bvh` was built on another surface ([`Bvh::within`]).
 #[must_use]
 pub fn choose_facet(
     surface: &Surface,
@@ -46,7 +49,12 @@ pub fn choose_facet(
     slave: u32,
     radius: f64,
 ) -> Option<(u32, NodeFacet)> {
-    let x = positions[slave as usize];
+    let Some(&x) = positions.get(slave as usize) else {
+        panic!(
+            "slave node {slave} has no position: {} node positions were given",
+            positions.len()
+        );
+    };
     let query = Query {
         point: x,
         exclude: Some(slave),

@@ -75,7 +75,8 @@ impl MultiplierBlock {
         }
     }
 
-    /// The inactive block, which drives `λ` to zero.
+    /// The inactive block, which drives `λ` to zero, for a scale `kappa > 0` (at `kappa = 0` its
+    /// entries are infinite, which [`multiplier_block`] reports as [`GeometryError::Overflow`]).
     #[must_use]
     pub fn inactive(lambda: f64, kappa: f64) -> Self {
         let inv = 1.0 / kappa;
