@@ -586,6 +586,13 @@ impl Analysis {
             };
             let mut values = [None; 3];
             for c in &b.fix {
+                if values[c.index()].is_some() {
+                    problems.push(invalid(format!(
+                        "boundary '{}': component {} is listed twice in `fix`",
+                        b.group,
+                        ["x", "y", "z"][c.index()]
+                    )));
+                }
                 values[c.index()] = Some(0.0);
             }
             if let Some(d) = &b.displacement {

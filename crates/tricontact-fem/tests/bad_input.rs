@@ -536,3 +536,16 @@ fn an_overflowing_coordinate_names_its_node() {
         "{e}"
     );
 }
+
+/// A component listed twice in `fix` is named (it was accepted, as a slip for another component
+/// would be).
+#[test]
+fn a_component_fixed_twice_is_named() {
+    let extra = "[[boundary]]\ngroup = \"solid\"\nfix = [\"x\", \"y\", \"x\"]\n";
+    let p = setup("fix-twice", &msh(4, &TET), &model_text("solid", extra));
+    let msg = load_analysis(&p).expect_err("fix twice").to_string();
+    assert!(
+        msg.contains("boundary 'solid': component x is listed twice in `fix`"),
+        "{msg}"
+    );
+}
