@@ -8,7 +8,7 @@
 //! (`λ̂ = 0` with `P = 0` keeps the stiffness `α∇P⊗∇P`, so touching bodies are supported from the
 //! first iteration; a node whose status cycles is held closed for the rest of the increment, see
 //! [`super::ContactTerms`].) After Newton converged, the Uzawa update `λ_{k+1} = min(0, λ̂)` is applied to
-//! every node until the largest penetration is below the pair's tolerance (see
+//! every node until the largest gap `|P|` of a closed node is below the pair's tolerance (see
 //! [`super::ContactTerms`]). Finite sliding uses the kernel's [`tricontact::contact::augmented`].
 
 use tricontact::{GeometryError, Mat12, Vec12};

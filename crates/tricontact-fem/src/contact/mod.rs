@@ -29,7 +29,8 @@
 //!   master) and opens again every third iteration. Holding multiplier nodes in the status they
 //!   wanted at the fifth change instead left nodes open inside the master (0.041 deep, 80 % of the
 //!   press, in `contact-block`).
-//! * Augmented Lagrangian: after Newton converged, if the largest penetration exceeds the pair's
+//! * Augmented Lagrangian: after Newton converged, if the largest gap `|P|` of a closed node (a
+//!   penetration, or an opening still held by its estimate when backing off) exceeds the pair's
 //!   tolerance, every node's estimate takes the Uzawa update `λ_k ← min(0, λ_k + αP)` and the
 //!   increment is solved again (outer loop of [`crate::driver`]).
 //! * Facet cycling: a node sitting in a concave kink of the master (a valley, e.g. the bottom of
@@ -572,16 +573,18 @@ impl ExtraTerms for ContactTerms {
             if pair.method != ContactMethod::Augmented {
                 continue;
             }
+            // Closed nodes only, and their gaps either way: backing off, the estimates of the
+            // loaded state hold nodes closed with their gaps open, still transmitting force.
             let largest = self.trial[p]
                 .iter()
                 .flatten()
                 .filter(|s| s.active)
-                .fold(0.0f64, |m, s| m.max(-s.gap));
+                .fold(0.0f64, |m, s| m.max(s.gap.abs()));
             if largest > pair.tolerance {
                 done = false;
                 self.outer = Some(format!(
-                    "contact '{}': largest penetration {largest:.3e} still above tolerance × h = \
-                     {:.3e}; raise its `tolerance`",
+                    "contact '{}': largest gap |P| of a closed node {largest:.3e} still above \
+                     tolerance × h = {:.3e}; raise its `tolerance`",
                     pair.name, pair.tolerance
                 ));
                 for st in self.trial[p].iter_mut().flatten() {
