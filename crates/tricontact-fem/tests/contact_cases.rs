@@ -220,6 +220,76 @@ fn augmented_lagrangian_closes_the_gaps_of_closed_nodes_when_backing_off() {
     }
 }
 
+/// A block 0.01 above a stiff base meshed finely (master edges 1/12, so the search radius is
+/// `√2/12`), its top pushed down 0.2 in `increments`: the normal force and the largest
+/// penetration at the end, and the run's cutbacks.
+fn pushed_through(method: &str, increments: usize) -> (f64, f64, usize) {
+    let l = box_mesh([1.0, 1.0, 0.5], [12, 12, 1], ElementKind::Hex8);
+    let u = box_mesh([0.5, 0.5, 1.0], [2, 2, 4], ElementKind::Hex8);
+    let mesh = tricontact_fem::structured::stack(&l, &u, [0.25, 0.25, 0.51]);
+    // A stiff base: its surface stays flat under the block.
+    let text = format!(
+        r#"[[material]]
+name = "base"
+type = "linear_elastic"
+E = 1e5
+nu = 0.3
+[[material]]
+name = "block"
+type = "linear_elastic"
+E = 1000.0
+nu = 0.3
+[[body]]
+group = "lower_solid"
+material = "base"
+[[body]]
+group = "upper_solid"
+material = "block"
+[[boundary]]
+group = "lower_zmin"
+fix = ["x", "y", "z"]
+[[boundary]]
+group = "upper_zmax"
+displacement = {{ x = 0.0, y = 0.0, z = -0.2 }}
+{}
+[[step]]
+increments = {increments}
+"#,
+        contact(method, "")
+    );
+    let an = common::analysis(mesh, &text);
+    let mut terms = ContactTerms::new(&an);
+    let summary = tricontact_fem::driver::run(&an, &mut terms, &mut |_| Ok(())).expect("run");
+    (
+        history(&terms, "_normal_force"),
+        history(&terms, "_max_penetration"),
+        summary.cutbacks,
+    )
+}
+
+/// In one increment, the first Newton step (no contact yet) carries the block's bottom 0.19 into
+/// the base, beyond the search radius (the longest master edge, 0.118): its nodes find no facet
+/// there. With multipliers the increment converged with one node closed and 4.5 of the force
+/// (49 in twenty increments), the block inside the base and no penetration reported. A slave node
+/// that went through the master surface without a facet now fails the increment, which is cut
+/// back until its steps stay within reach.
+#[test]
+fn a_node_pushed_through_the_master_in_one_step_is_not_lost() {
+    for method in ["penalty", "multiplier", "augmented"] {
+        let (reference, _, _) = pushed_through(method, 20);
+        let (force, penetration, cutbacks) = pushed_through(method, 1);
+        assert!(reference > 40.0, "{method}: {reference}");
+        assert!(
+            (force - reference).abs() <= 1e-3 * reference,
+            "{method}: {force} in one increment against {reference} in twenty"
+        );
+        assert!(penetration < 1e-3, "{method}: penetration {penetration}");
+        if method == "multiplier" {
+            assert!(cutbacks > 0, "{method}: no cutback");
+        }
+    }
+}
+
 #[test]
 fn pressed_then_pulled_back_loses_contact() {
     for method in ["penalty", "multiplier", "augmented"] {

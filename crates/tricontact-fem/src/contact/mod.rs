@@ -56,8 +56,8 @@ pub mod penalty;
 pub mod state;
 
 use tricontact::Vec3;
-use tricontact::contact::choose_facet;
-use tricontact::search::Bvh;
+use tricontact::contact::{PROJECTION_TOLERANCE, choose_facet};
+use tricontact::search::{Bvh, Query};
 
 use crate::analysis::Analysis;
 use crate::assembly::ExtraTerms;
@@ -95,6 +95,8 @@ pub struct ContactTerms {
     note: Option<String>,
     /// Why the last Uzawa check asked for another solve.
     outer: Option<String>,
+    /// Node positions at the start of the increment (see [`ContactTerms::check_crossings`]).
+    start: Vec<Vec3>,
 }
 
 impl ContactTerms {
@@ -141,6 +143,7 @@ impl ContactTerms {
             areas,
             note: None,
             outer: None,
+            start: Vec::new(),
         }
     }
 
@@ -295,6 +298,64 @@ impl ContactTerms {
     }
 }
 
+impl ContactTerms {
+    /// Checks, at a converged state `u`, that no slave node without a facet went through the
+    /// master surface during the increment. A Newton step that carries a node deeper into the
+    /// master than the search radius (the longest master edge) leaves it with no facet within
+    /// reach, hence open, and the increment could converge with the bodies interpenetrating and no
+    /// contact force. Such a node is behind its closest master facet now (`P < 0`, projecting
+    /// into it, and beyond the radius, or the facet would have been found) and was within reach
+    /// of that facet's plane at the start of the increment (`P > −radius`: in front of it, or in
+    /// contact); the increment then fails and is cut back, until its steps stay within the
+    /// radius. A node already deeper at the start (meshes that overlap from the outset) is left
+    /// to the initial-penetration check.
+    fn check_crossings(&self, u: &[f64]) -> Result<(), String> {
+        let x = self.positions(u);
+        for (p, pair) in self.pairs.iter().enumerate() {
+            for (q, pass) in pair.passes.iter().enumerate() {
+                let lost: Vec<usize> = (0..pass.slaves.len())
+                    .filter(|&j| self.trial[p][q][j].facet.is_none())
+                    .collect();
+                if lost.is_empty() {
+                    continue;
+                }
+                let bvh = Bvh::build(&pass.surface, &x, 0.0).map_err(|e| e.to_string())?;
+                for j in lost {
+                    let s = pass.slaves[j];
+                    let query = Query {
+                        point: x[s],
+                        exclude: u32::try_from(s).ok(),
+                    };
+                    let Some(hit) = bvh.closest(&pass.surface, &query, f64::INFINITY) else {
+                        continue;
+                    };
+                    let nodes = pass.surface.facets()[hit.facet as usize].map(|a| a as usize);
+                    let gap_at = |x: &[Vec3]| {
+                        tricontact::NodeFacet::new(x[nodes[0]], x[nodes[1]], x[nodes[2]], x[s]).ok()
+                    };
+                    let (Some(now), Some(then)) = (gap_at(&x), gap_at(&self.start)) else {
+                        continue;
+                    };
+                    if now.gap() < 0.0
+                        && then.gap() > -pass.radius
+                        && now.projection.is_inside(PROJECTION_TOLERANCE)
+                    {
+                        return Err(format!(
+                            "contact '{}': slave node {} went through the master surface in this increment, {:.3e} behind face {}, beyond the search radius {:.3e} (the longest master edge), so it found no facet; smaller increments keep each Newton step within reach",
+                            pair.name,
+                            self.node_tags[s],
+                            -now.gap(),
+                            pass.face_tags[hit.facet as usize],
+                            pass.radius
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
 fn scatter(
     nodes: [usize; 4],
     r: &tricontact::Vec12,
@@ -372,6 +433,7 @@ impl ExtraTerms for ContactTerms {
             st.left_facet = None;
         }
         let x = self.positions(u);
+        self.start.clone_from(&x);
         for p in 0..self.pairs.len() {
             if !self.pairs[p].small_sliding {
                 continue;
@@ -565,8 +627,9 @@ impl ExtraTerms for ContactTerms {
         self.note.clone()
     }
 
-    fn after_converged(&mut self, _u: &[f64]) -> Result<bool, String> {
+    fn after_converged(&mut self, u: &[f64]) -> Result<bool, String> {
         self.check_held_nodes()?;
+        self.check_crossings(u)?;
         let mut done = true;
         self.outer = None;
         for (p, pair) in self.pairs.iter().enumerate() {
