@@ -226,7 +226,7 @@ fn run(
         writer.write(&an, info)?;
         record.record(&an, info);
         if an.output.history {
-            record.write_tables(&dir)?;
+            record.write_tables_if_due(&dir)?;
         }
         pb.set_position((info.time * 1000.0).round() as u64);
         pb.set_message(format!("step {} t={:.3}", info.step + 1, info.load_factor));
@@ -261,6 +261,16 @@ fn run(
         Ok(())
     });
     pb.finish_and_clear();
+    // What was left pending, whether the run succeeded or not: the tables' last rows, and on a
+    // failure the last converged state if `every` skipped it. A run's own error comes first.
+    let flushed = writer.finish(&an).and_then(|()| {
+        if an.output.history {
+            record.write_tables(&dir).map(|_| ())
+        } else {
+            Ok(())
+        }
+    });
+    let summary = summary.and_then(|s| flushed.map(|()| s));
     if let (
         Err(FemError::NotConverged {
             step,

@@ -43,6 +43,7 @@ pub mod shape;
 pub mod structured;
 pub mod tet10;
 pub mod tet4;
+pub mod throttle;
 pub mod vtu;
 
 pub use error::{FemError, Result};

@@ -6,13 +6,17 @@
 //!   stress), `von_mises`; cell data `stress`, `von_mises`, `material`;
 //! * `<stem>.pvd`: the collection, `timestep` = step index + load factor,
 //!   rewritten after each `.vtu` so ParaView can open a running job;
-//! * `history.csv`: one row per converged increment: step, name, increment,
+//! * `history.csv`: one row per converged increment (rewritten when due, see
+//!   [`crate::throttle`], and by [`ResultWriter::finish`]): step, name, increment,
 //!   load factor, time, iterations, final residual norm and relative
 //!   residual, then `Rx, Ry, Rz` summed over each boundary group, then the
 //!   columns of the extra terms (contact: see [`crate::contact`]); names
 //!   holding a comma, quote or line break are quoted
 //!   ([`crate::report::csv_field`], RFC 4180);
 //! * extra point fields of the extra terms (contact) in every `.vtu`.
+//!
+//! When a run fails, [`ResultWriter::finish`] writes the last converged increment's `.vtu` if
+//! `output.every` had skipped it, so that the state the run reached can be opened.
 //!
 //! Files of an earlier run that this run would write under the same names
 //! (`<stem>.pvd`, `<stem>_<step>_<increment>.vtu`, `history.csv` and the
@@ -29,12 +33,15 @@ use crate::driver::IncrementInfo;
 use crate::error::{FemError, Result};
 use crate::report::{FILE_NAMES, csv_field};
 use crate::results::{boundary_reactions, stress_fields};
+use crate::throttle::Throttle;
 use crate::vtu::{Field, Grid, pvd_string, vtk_cell, vtu_string};
 
 /// `history.csv`: one row per converged increment.
 const HISTORY_CSV: &str = "history.csv";
 
-/// Whether `name` is `<stem>_<3 digits>_<4 digits>.vtu`, a `.vtu` of the model `stem`.
+/// Whether `name` is `<stem>_<step>_<increment>.vtu`, a `.vtu` of the model `stem`: at least 3
+/// and 4 digits (the padding of the names, which grow past it from step 1000 and increment
+/// 10000).
 fn is_model_vtu(name: &str, stem: &str) -> bool {
     let Some(core) = name
         .strip_prefix(stem)
@@ -43,7 +50,7 @@ fn is_model_vtu(name: &str, stem: &str) -> bool {
     else {
         return false;
     };
-    let numeric = |s: &str, n: usize| s.len() == n && s.bytes().all(|b| b.is_ascii_digit());
+    let numeric = |s: &str, n: usize| s.len() >= n && s.bytes().all(|b| b.is_ascii_digit());
     matches!(core.split_once('_'), Some((s, i)) if numeric(s, 3) && numeric(i, 4))
 }
 
@@ -81,8 +88,63 @@ pub struct ResultWriter {
     pvd: Vec<(f64, String)>,
     history: String,
     header_done: bool,
+    /// Rows added since `history.csv` was last written.
+    history_pending: bool,
+    rewrites: Throttle,
+    /// The last converged increment when its `.vtu` was skipped (`output.every`).
+    pending: Option<Snapshot>,
     /// Paths written so far.
     pub written: Vec<PathBuf>,
+}
+
+/// What a `.vtu` shows of a converged increment.
+#[derive(Debug, Clone, Copy)]
+struct State<'a> {
+    step: usize,
+    increment: usize,
+    time: f64,
+    nlgeom: bool,
+    u: &'a [f64],
+    reactions: &'a [f64],
+    point_fields: &'a [(String, usize, Vec<f64>)],
+}
+
+/// A [`State`] kept after its increment.
+#[derive(Debug, Clone)]
+struct Snapshot {
+    step: usize,
+    increment: usize,
+    time: f64,
+    nlgeom: bool,
+    u: Vec<f64>,
+    reactions: Vec<f64>,
+    point_fields: Vec<(String, usize, Vec<f64>)>,
+}
+
+impl Snapshot {
+    fn of(s: &State<'_>) -> Self {
+        Self {
+            step: s.step,
+            increment: s.increment,
+            time: s.time,
+            nlgeom: s.nlgeom,
+            u: s.u.to_vec(),
+            reactions: s.reactions.to_vec(),
+            point_fields: s.point_fields.to_vec(),
+        }
+    }
+
+    fn state(&self) -> State<'_> {
+        State {
+            step: self.step,
+            increment: self.increment,
+            time: self.time,
+            nlgeom: self.nlgeom,
+            u: &self.u,
+            reactions: &self.reactions,
+            point_fields: &self.point_fields,
+        }
+    }
 }
 
 impl ResultWriter {
@@ -132,8 +194,39 @@ impl ResultWriter {
             pvd: Vec::new(),
             history,
             header_done: false,
+            history_pending: false,
+            rewrites: Throttle::default(),
+            pending: None,
             written: Vec::new(),
         })
+    }
+
+    /// Writes what [`ResultWriter::write`] left pending: `history.csv`, and the last converged
+    /// increment's `.vtu` when `output.every` skipped it (a run that failed). Call it once the
+    /// run ended, whether it succeeded or not.
+    ///
+    /// # Errors
+    /// I/O errors.
+    pub fn finish(&mut self, an: &Analysis) -> Result<()> {
+        if self.history_pending {
+            self.write_history()?;
+        }
+        if let Some(last) = self.pending.take() {
+            self.write_vtu(an, &last.state())?;
+        }
+        Ok(())
+    }
+
+    fn write_history(&mut self) -> Result<()> {
+        let started = std::time::Instant::now();
+        let p = self.dir.join(HISTORY_CSV);
+        write_atomic(&p, self.history.as_bytes())?;
+        if !self.written.contains(&p) {
+            self.written.push(p);
+        }
+        self.history_pending = false;
+        self.rewrites.wrote(started);
+        Ok(())
     }
 
     /// Records one converged increment.
@@ -174,14 +267,36 @@ impl ResultWriter {
         }
         self.history.push('\n');
         if an.output.history {
-            let p = self.dir.join(HISTORY_CSV);
-            write_atomic(&p, self.history.as_bytes())?;
-            if !self.written.contains(&p) {
-                self.written.push(p);
+            self.history_pending = true;
+            if self.rewrites.due() {
+                self.write_history()?;
             }
         }
+        if !an.output.vtu {
+            return Ok(());
+        }
+        let state = State {
+            step: info.step,
+            increment: info.increment,
+            time: info.time,
+            nlgeom: info.nlgeom,
+            u: info.u,
+            reactions: info.reactions,
+            point_fields: info.point_fields,
+        };
         let every = an.output.every.max(1);
-        if an.output.vtu && (info.increment.is_multiple_of(every) || info.load_factor >= 1.0) {
+        if info.increment.is_multiple_of(every) || info.load_factor >= 1.0 {
+            self.pending = None;
+            self.write_vtu(an, &state)
+        } else {
+            self.pending = Some(Snapshot::of(&state));
+            Ok(())
+        }
+    }
+
+    /// Writes the `.vtu` of `info` and rewrites the `.pvd`.
+    fn write_vtu(&mut self, an: &Analysis, info: &State<'_>) -> Result<()> {
+        {
             let name = format!(
                 "{}_{:03}_{:04}.vtu",
                 self.stem,

@@ -27,6 +27,7 @@ use crate::driver::IncrementInfo;
 use crate::error::{FemError, Result};
 use crate::hertz::{HertzSample, HertzSetup, fit_approach};
 use crate::plots::{Axes, Series, chart, check_png};
+use crate::throttle::Throttle;
 
 /// `newton.csv`: the residual of every Newton iteration.
 const NEWTON_CSV: &str = "newton.csv";
@@ -87,6 +88,8 @@ pub struct RunRecord {
     pub hertz: Option<(HertzSetup, Vec<HertzSample>)>,
     /// History columns of the extra terms at the last increment.
     pub last: Vec<(String, f64)>,
+    /// When the tables were last written ([`RunRecord::write_tables_if_due`]).
+    rewrites: Throttle,
 }
 
 impl RunRecord {
@@ -117,6 +120,21 @@ impl RunRecord {
         if let Some((setup, samples)) = &mut self.hertz {
             samples.push(setup.measure(an, info));
         }
+    }
+
+    /// [`RunRecord::write_tables`] when a rewrite is due ([`crate::throttle`]): after each
+    /// increment, so that a running job's tables can be watched without rewriting them at every
+    /// increment; write them once more when the run ends.
+    ///
+    /// # Errors
+    /// File errors.
+    pub fn write_tables_if_due(&mut self, dir: &Path) -> Result<()> {
+        if self.rewrites.due() {
+            let started = std::time::Instant::now();
+            self.write_tables(dir)?;
+            self.rewrites.wrote(started);
+        }
+        Ok(())
     }
 
     /// Writes `newton.csv` and, with a Hertz comparison, `hertz.csv` and `hertz_profile.csv`.

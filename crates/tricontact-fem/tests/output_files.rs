@@ -44,14 +44,17 @@ fn fresh_dir(tag: &str) -> PathBuf {
 fn run_into(an: &Analysis, dir: &Path, fail_at: Option<usize>) -> Result<()> {
     let mut writer = ResultWriter::new(an, dir, "m")?;
     let mut record = RunRecord::new(None);
-    run(an, &mut NoExtra, &mut |info| {
+    let summary = run(an, &mut NoExtra, &mut |info| {
         if Some(info.increment) == fail_at {
             return Err(FemError::Output("did not converge".into()));
         }
         writer.write(an, info)?;
         record.record(an, info);
-        record.write_tables(dir).map(|_| ())
-    })?;
+        record.write_tables_if_due(dir)
+    });
+    writer.finish(an)?;
+    record.write_tables(dir)?;
+    summary?;
     record.write_plots(dir).map(|_| ())
 }
 
@@ -315,5 +318,24 @@ fn newton_csv_header_blank_lines_and_last_increment() {
     let rows =
         "step,increment,iteration,relative_residual\n2,1,0,1\n2,1,1,1e-6\n1,1,0,0\n1,1,1,0\n";
     plot(rows).expect("step 2 has something to plot");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A run that fails after increments whose `.vtu` `output.every` skipped still leaves the last
+/// converged state to open (it left only the tables), listed in the `.pvd`, with every converged
+/// row in the tables.
+#[test]
+fn a_failed_run_keeps_its_last_converged_state() {
+    let text = model().replace("increments = 3", "increments = 6") + "every = 4\n";
+    let an = analysis(&text);
+    let dir = fresh_dir("every-fail");
+    run_into(&an, &dir, Some(3)).expect_err("the run fails");
+    let mut expected = ["history.csv", "m.pvd", "m_001_0002.vtu", "newton.csv"];
+    expected.sort_unstable();
+    assert_eq!(names(&dir), expected);
+    let pvd = std::fs::read_to_string(dir.join("m.pvd")).expect("pvd");
+    assert!(pvd.contains("m_001_0002.vtu"), "{pvd}");
+    let history = std::fs::read_to_string(dir.join("history.csv")).expect("history");
+    assert_eq!(history.lines().count(), 3, "{history}");
     let _ = std::fs::remove_dir_all(&dir);
 }

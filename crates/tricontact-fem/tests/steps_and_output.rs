@@ -55,10 +55,14 @@ fn every_vtu_and_history_switches() {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("dir");
     // Left over from an earlier run: removed. Unrelated files: kept.
-    std::fs::write(dir.join("m_001_0007.vtu"), "old").expect("write");
+    // Names past the padding (increment 10000, step 1000) too.
+    for old in ["m_001_0007.vtu", "m_001_10000.vtu", "m_1000_0001.vtu"] {
+        std::fs::write(dir.join(old), "old").expect("write");
+    }
     std::fs::write(dir.join("notes_001_0007.vtu"), "keep").expect("write");
     let mut w = ResultWriter::new(&an, &dir, "m").expect("writer");
     run(&an, &mut NoExtra, &mut |info| w.write(&an, info)).expect("run");
+    w.finish(&an).expect("finish");
     std::fs::remove_file(dir.join("notes_001_0007.vtu")).expect("unrelated file kept");
     let mut names: Vec<String> = std::fs::read_dir(&dir)
         .expect("dir")
@@ -79,6 +83,7 @@ fn every_vtu_and_history_switches() {
     let _ = std::fs::remove_dir_all(&dir2);
     let mut w = ResultWriter::new(&an2, &dir2, "m").expect("writer");
     run(&an2, &mut NoExtra, &mut |info| w.write(&an2, info)).expect("run");
+    w.finish(&an2).expect("finish");
     assert_eq!(std::fs::read_dir(&dir2).expect("dir").count(), 0);
     let _ = std::fs::remove_dir_all(&dir);
     let _ = std::fs::remove_dir_all(&dir2);
