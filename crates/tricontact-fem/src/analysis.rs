@@ -124,6 +124,7 @@ impl Analysis {
     /// # Errors
     /// Any validation problem.
     pub fn new(model: &Model, mesh: Mesh) -> Result<Self> {
+        mesh.check()?;
         let (an, problems) = Self::build(model, mesh);
         match FemError::combine(problems) {
             None => Ok(an),
@@ -254,7 +255,8 @@ impl Analysis {
         (x0, ue)
     }
 
-    /// Resolves the model, returning the analysis and every problem found.
+    /// Resolves the model, returning the analysis and every problem found. The mesh must pass
+    /// [`Mesh::check`] (the Gmsh reader's meshes do; [`Analysis::new`] checks it).
     #[must_use]
     pub fn build(model: &Model, mut mesh: Mesh) -> (Self, Vec<FemError>) {
         let mut problems: Vec<FemError> = Vec::new();

@@ -8,6 +8,8 @@
 //! A physical group of dimension 3 is an *element set*, of dimension 2 a
 //! *surface* (its triangle/quad faces), and every group is a *node set*.
 
+use crate::error::FemError;
+
 /// Supported element types.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum ElementKind {
@@ -111,6 +113,60 @@ pub struct Mesh {
 }
 
 impl Mesh {
+    /// Checks what the Gmsh reader guarantees, for a mesh built by other code: every coordinate
+    /// finite and within ±[`crate::gmsh::MAX_COORDINATE`], a tag per node, every element with the
+    /// node count of its kind and its nodes in range, every group's nodes and elements in range.
+    ///
+    /// # Errors
+    /// [`FemError::Invalid`] naming the first node, element or group at fault.
+    pub fn check(&self) -> Result<(), FemError> {
+        let invalid = |s: String| Err(FemError::Invalid(vec![format!("mesh: {s}")]));
+        if self.node_tags.len() != self.nodes.len() {
+            return invalid(format!(
+                "{} node tags for {} nodes",
+                self.node_tags.len(),
+                self.nodes.len()
+            ));
+        }
+        let limit = crate::gmsh::MAX_COORDINATE;
+        if let Some((a, x)) = self
+            .nodes
+            .iter()
+            .enumerate()
+            .find(|(_, x)| !x.iter().all(|c| c.abs() <= limit))
+        {
+            return invalid(format!(
+                "node {} has a coordinate that is not finite or beyond ±{limit:e} ({:e}, {:e}, {:e})",
+                self.node_tags[a], x[0], x[1], x[2]
+            ));
+        }
+        let n = self.nodes.len();
+        for e in &self.elements {
+            if e.nodes.len() != e.kind.num_nodes() {
+                return invalid(format!(
+                    "element {} ({:?}) has {} nodes, not {}",
+                    e.tag,
+                    e.kind,
+                    e.nodes.len(),
+                    e.kind.num_nodes()
+                ));
+            }
+            if let Some(&a) = e.nodes.iter().find(|&&a| a >= n) {
+                return invalid(format!("element {} names node index {a} of {n}", e.tag));
+            }
+        }
+        for g in &self.groups {
+            if let Some(&a) = g.nodes.iter().find(|&&a| a >= n) {
+                return invalid(format!("group '{}' names node index {a} of {n}", g.name));
+            }
+            let m = self.elements.len();
+            if let Some(&e) = g.elements.iter().find(|&&e| e >= m) {
+                return invalid(format!("group '{}' names element index {e} of {m}", g.name));
+            }
+        }
+        Ok(())
+    }
+
     /// Finds a group by name (the one of lowest dimension if the name is used in several; the
     /// model's references go through [`Mesh::lookup`], which reports that case).
     #[must_use]

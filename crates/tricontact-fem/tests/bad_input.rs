@@ -549,3 +549,45 @@ fn a_component_fixed_twice_is_named() {
         "{msg}"
     );
 }
+
+/// A mesh built by other code than the Gmsh reader is checked as the reader checks its own: a NaN
+/// coordinate, an element with a node out of range or too few nodes, a group naming a missing
+/// node are errors that name them (they passed, or panicked with an index out of bounds).
+#[test]
+fn a_mesh_built_in_code_is_checked_like_a_read_one() {
+    use tricontact_fem::analysis::Analysis;
+    use tricontact_fem::mesh::ElementKind;
+    use tricontact_fem::model::Model;
+    use tricontact_fem::structured::box_mesh;
+    let text = model_text(
+        "solid",
+        "[[boundary]]\ngroup = \"xmin\"\nfix = [\"x\", \"y\", \"z\"]\n",
+    );
+    let text = format!("{text}\n").replace("file = \"m.msh\"", "file = \"unused.msh\"");
+    let model = Model::parse(&text, std::path::Path::new("m.toml")).expect("model");
+    let good = box_mesh([1.0, 1.0, 1.0], [1, 1, 1], ElementKind::Hex8);
+    assert!(Analysis::new(&model, good.clone()).is_ok());
+    let tag = good.node_tags[3];
+    let mut nan = good.clone();
+    nan.nodes[3][1] = f64::NAN;
+    let mut out_of_range = good.clone();
+    out_of_range.elements[0].nodes[2] = 99;
+    let mut short = good.clone();
+    short.elements[0].nodes.truncate(3);
+    let mut group = good.clone();
+    group.groups[0].nodes.push(99);
+    for (mesh, expected) in [
+        (
+            nan,
+            format!("node {tag} has a coordinate that is not finite"),
+        ),
+        (out_of_range, "names node index 99 of 8".to_string()),
+        (short, "has 3 nodes, not 8".to_string()),
+        (group, "names node index 99 of 8".to_string()),
+    ] {
+        let msg = Analysis::new(&model, mesh)
+            .expect_err("bad mesh")
+            .to_string();
+        assert!(msg.contains(&expected), "{msg}");
+    }
+}
