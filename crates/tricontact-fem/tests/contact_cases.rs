@@ -630,6 +630,7 @@ fn contact_fields_and_history_columns_are_written() {
     let mut w = tricontact_fem::output::ResultWriter::new(&an, &dir, "m").expect("writer");
     let mut terms = ContactTerms::new(&an);
     tricontact_fem::driver::run(&an, &mut terms, &mut |info| w.write(&an, info)).expect("run");
+    w.finish(&an).expect("finish");
     let csv = std::fs::read_to_string(dir.join("history.csv")).expect("history");
     let header = csv.lines().next().expect("header");
     for col in ["_normal_force", "_active", "_max_penetration", "_area"] {
@@ -656,6 +657,14 @@ fn contact_fields_and_history_columns_are_written() {
     let area = history(&terms, "_area");
     assert!((area - 0.25).abs() < 1e-12, "{area}");
     let _ = std::fs::remove_dir_all(&dir);
+    // Two passes: each side measures the interface (the lower one by its middle node's 0.25), and
+    // the area is their mean (it was their sum, 0.5), the closed nodes both sides'.
+    let text = text.replace("[[step]]", "two_pass = true\n[[step]]");
+    let an = common::analysis(small_blocks(ElementKind::Hex8), &text);
+    let (terms, _, _) = common::solve_contact(&an);
+    let area = history(&terms, "_area");
+    assert!((area - 0.25).abs() < 1e-12, "two passes: {area}");
+    assert_eq!(history(&terms, "_active"), 10.0);
 }
 
 #[test]

@@ -10,9 +10,9 @@
 //! * `contact_facet`: Gmsh tag of the master face a closed slave node is on (0 when open).
 //!
 //! History columns per pair `<slave>-<master>`: `_normal_force` (`Σ −λ` over all slave nodes and
-//! passes), `_active` (closed nodes), `_max_penetration` (`max(0, −P)` over every slave node with a facet, open
+//! passes), `_active` (closed nodes, of both passes with `two_pass`), `_max_penetration` (`max(0, −P)` over every slave node with a facet, open
 //! or closed, so that a node left open inside the master shows), `_area`
-//! (lumped area of the closed nodes), `_min_pressure` and `_max_pressure` (`contact_pressure` over
+//! (lumped area of the closed nodes; with `two_pass`, the mean of the two sides'), `_min_pressure` and `_max_pressure` (`contact_pressure` over
 //! the closed slave nodes that have an area; 0 when there are none).
 
 use super::ContactTerms;
@@ -87,7 +87,12 @@ impl ContactTerms {
             out.push((format!("{}_normal_force", pair.name), force));
             out.push((format!("{}_active", pair.name), active as f64));
             out.push((format!("{}_max_penetration", pair.name), pen));
-            out.push((format!("{}_area", pair.name), area));
+            // Each pass measures the contact area on its own slave side: their mean, not their
+            // sum (two passes counted the interface twice).
+            out.push((
+                format!("{}_area", pair.name),
+                area / pair.passes.len().max(1) as f64,
+            ));
             out.push((format!("{}_min_pressure", pair.name), p_min.min(p_max)));
             out.push((format!("{}_max_pressure", pair.name), p_max));
         }
