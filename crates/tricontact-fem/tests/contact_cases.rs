@@ -821,3 +821,63 @@ fn a_degenerate_master_face_is_named_by_its_tags() {
         "{msg}"
     );
 }
+
+/// A master surface split into two contacts with the same slave surface, with multipliers: the
+/// slave nodes on the seam are closed in both, and their two constraints repeat each other. The
+/// singular system is reported with that cause (it blamed prescribed normal components, which the
+/// model does not have).
+#[test]
+fn a_node_closed_in_two_multiplier_contacts_is_named_as_the_cause() {
+    use tricontact_fem::mesh::Group;
+    let mut mesh = small_blocks(ElementKind::Hex8);
+    let top = mesh
+        .groups
+        .iter()
+        .find(|g| g.name == "lower_zmax")
+        .expect("top")
+        .clone();
+    for (name, left) in [("left_top", true), ("right_top", false)] {
+        let elements: Vec<usize> = top
+            .elements
+            .iter()
+            .copied()
+            .filter(|&e| {
+                let nodes = &mesh.elements[e].nodes;
+                let x = nodes.iter().map(|&a| mesh.nodes[a][0]).sum::<f64>() / nodes.len() as f64;
+                (x < 0.5) == left
+            })
+            .collect();
+        let mut nodes: Vec<usize> = elements
+            .iter()
+            .flat_map(|&e| mesh.elements[e].nodes.clone())
+            .collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        mesh.groups.push(Group {
+            name: name.to_string(),
+            dim: 2,
+            elements,
+            nodes,
+        });
+    }
+    let mut text = format!(
+        "{MAT}[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n[[boundary]]\ngroup = \"upper_zmax\"\ndisplacement = {{ x = 0.0, y = 0.0, z = -0.01 }}\n"
+    );
+    for master in ["left_top", "right_top"] {
+        text += &format!(
+            "[[contact]]\nslave = \"upper_zmin\"\nmaster = \"{master}\"\nmethod = \"multiplier\"\n"
+        );
+    }
+    text += "[[step]]\n";
+    let an = common::analysis(mesh, &text);
+    let mut terms = ContactTerms::new(&an);
+    let err = tricontact_fem::driver::run(&an, &mut terms, &mut |_| Ok(()))
+        .expect_err("singular")
+        .to_string();
+    assert!(
+        err.contains(
+            "is closed in contacts 'upper_zmin-left_top' and 'upper_zmin-right_top' at once"
+        ),
+        "{err}"
+    );
+}

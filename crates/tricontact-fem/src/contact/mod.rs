@@ -299,6 +299,35 @@ impl ContactTerms {
 }
 
 impl ContactTerms {
+    /// A slave node closed in two multiplier pairs at once with (nearly) the same normal, as on the
+    /// seam of a master surface split into two pairs: its two constraint rows repeat each other.
+    fn repeated_constraints(&self) -> Option<String> {
+        let mut closed: std::collections::HashMap<usize, (&str, [f64; 3])> =
+            std::collections::HashMap::new();
+        for (pair, states) in self.pairs.iter().zip(&self.trial) {
+            if pair.method != ContactMethod::Multiplier {
+                continue;
+            }
+            for (&node, st) in pair.passes[0].slaves.iter().zip(&states[0]) {
+                if !st.active {
+                    continue;
+                }
+                if let Some(&(first, n)) = closed.get(&node) {
+                    let cos: f64 = (0..3).map(|d| n[d] * st.normal[d]).sum();
+                    if cos.abs() > 1.0 - 1e-6 {
+                        return Some(format!(
+                            "slave node {} is closed in contacts '{first}' and '{}' at once, with the same normal, so its two constraints repeat each other: make the two master groups one contact, or use method = \"penalty\"",
+                            self.node_tags[node], pair.name
+                        ));
+                    }
+                } else {
+                    closed.insert(node, (&pair.name, st.normal));
+                }
+            }
+        }
+        None
+    }
+
     /// Checks, at a converged state `u`, that no slave node without a facet went through the
     /// master surface during the increment. A Newton step that carries a node deeper into the
     /// master than the search radius (the longest master edge) leaves it with no facet within
@@ -716,6 +745,7 @@ impl ExtraTerms for ContactTerms {
                 shown.join(", ")
             ));
         }
+        causes.extend(self.repeated_constraints());
         (!causes.is_empty()).then(|| causes.join("; "))
     }
 
