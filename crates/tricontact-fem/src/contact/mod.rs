@@ -92,6 +92,8 @@ pub struct ContactTerms {
     committed_force: Vec<f64>,
     trial_force: Vec<f64>,
     areas: Vec<f64>,
+    /// The mid-side nodes whose mean pressure is a tri6 corner's ([`pair::Pass::proxies`]).
+    proxies: Vec<Vec<usize>>,
     note: Option<String>,
     /// Why the last Uzawa check asked for another solve.
     outer: Option<String>,
@@ -123,10 +125,12 @@ impl ContactTerms {
             .collect();
         let n = an.mesh.nodes.len();
         let mut areas = vec![0.0; n];
+        let mut proxies = vec![Vec::new(); n];
         for p in &pairs {
             for q in &p.passes {
-                for (&s, &a) in q.slaves.iter().zip(&q.areas) {
+                for ((&s, &a), near) in q.slaves.iter().zip(&q.areas).zip(&q.proxies) {
                     areas[s] = a;
+                    proxies[s].clone_from(near);
                 }
             }
         }
@@ -141,6 +145,7 @@ impl ContactTerms {
             committed_force: vec![0.0; 3 * n],
             trial_force: vec![0.0; 3 * n],
             areas,
+            proxies,
             note: None,
             outer: None,
             start: Vec::new(),

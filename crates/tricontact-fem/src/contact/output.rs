@@ -4,7 +4,8 @@
 //! * `contact_force`: contact force on the node (3 components), `−` the contact part of the
 //!   internal force: `−λW` on a slave node, `λ N_a W` on the facet nodes;
 //! * `contact_pressure`: `|contact_force| / A` with `A = ∫N_a dA` the node's lumped area on its
-//!   contact surface (0 for nodes without area);
+//!   contact surface; at the corners of tri6 faces, where `∫N_a dA = 0`, the mean over the
+//!   mid-side nodes next to it (0 for other nodes without area);
 //! * `contact_gap`: the slave node's gap `P` (first pass; 0 without facet);
 //! * `contact_status`: 1 closed, 0 open (slave nodes);
 //! * `contact_facet`: Gmsh tag of the master face a closed slave node is on (0 when open).
@@ -18,11 +19,20 @@
 use super::ContactTerms;
 
 impl ContactTerms {
-    /// `|contact force| / A` of node `a` at the committed state; `None` for a node without area.
+    /// `|contact force| / A` of node `a` at the committed state; at a corner of tri6 faces (no
+    /// area of its own) the mean over the mid-side nodes next to it; `None` for a node without
+    /// area.
     fn pressure(&self, a: usize) -> Option<f64> {
-        let f = &self.committed_force[3 * a..3 * a + 3];
-        let m = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
-        (self.areas[a] > 0.0).then(|| m / self.areas[a])
+        let own = |a: usize| {
+            let f = &self.committed_force[3 * a..3 * a + 3];
+            let m = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
+            (self.areas[a] > 0.0).then(|| m / self.areas[a])
+        };
+        if self.areas[a] > 0.0 || self.proxies[a].is_empty() {
+            return own(a);
+        }
+        let near: Vec<f64> = self.proxies[a].iter().filter_map(|&b| own(b)).collect();
+        (!near.is_empty()).then(|| near.iter().sum::<f64>() / near.len() as f64)
     }
 
     /// The point fields at the committed state.

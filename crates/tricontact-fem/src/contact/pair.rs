@@ -37,8 +37,12 @@ use crate::model::{ContactDef, ContactMethod};
 pub struct Pass {
     /// Slave nodes (mesh node indices).
     pub slaves: Vec<usize>,
-    /// Tributary area of each slave node (`∫N_a dA` over its surface faces; 0 for a node group).
+    /// Tributary area of each slave node (`∫N_a dA` over its surface faces; 0 for a node group,
+    /// and for the corners of tri6 faces).
     pub areas: Vec<f64>,
+    /// For each slave node at a corner of tri6 faces, the mid-side nodes next to it, whose mean
+    /// pressure is its pressure (empty otherwise).
+    pub proxies: Vec<Vec<usize>>,
     /// Facets over mesh node indices, oriented outwards.
     pub surface: Surface,
     /// Gmsh tag of the face each facet comes from.
@@ -145,10 +149,15 @@ fn oriented_facets(
     Ok((facets, tags))
 }
 
-/// Lumped areas of the nodes of `faces`: `∫N_a dA` for tri3 (`A/3`) and quad4 (`A/4`, exact for
-/// parallelograms); a tri6 by its four sub-triangles.
-fn nodal_areas(mesh: &Mesh, faces: &[usize]) -> HashMap<usize, f64> {
+/// Areas of the nodes of `faces`, `∫N_a dA`: `A/3` for a tri3, `A/4` for a quad4 (exact for
+/// parallelograms), and for a tri6 (area `A` of its four sub-triangles) `0` at the corners and
+/// `A/3` at the mid-side nodes, the consistent values: a uniform pressure `p` loads a tri6 with
+/// `0` and `pA/3`. (Areas from the sub-triangles, `A/12` and `A/4`, put the pressure at 0 on the
+/// corners and `4p/3` on the mid-side nodes.) With the areas, for each tri6 corner the mid-side
+/// nodes next to it: a corner carries no force of its own, and its pressure is their mean.
+fn nodal_areas(mesh: &Mesh, faces: &[usize]) -> (HashMap<usize, f64>, HashMap<usize, Vec<usize>>) {
     let mut out = HashMap::new();
+    let mut proxies: HashMap<usize, Vec<usize>> = HashMap::new();
     for &f in faces {
         let el = &mesh.elements[f];
         let tris = triangles(el);
@@ -156,21 +165,36 @@ fn nodal_areas(mesh: &Mesh, faces: &[usize]) -> HashMap<usize, f64> {
             let x = |k: usize| mesh.nodes[t[k]];
             0.5 * sub(x(1), x(0)).cross(&sub(x(2), x(0))).norm()
         };
-        if el.kind == ElementKind::Quad4 {
-            let area: f64 = tris.iter().map(tri_area).sum();
-            for &a in &el.nodes {
-                *out.entry(a).or_insert(0.0) += area / 4.0;
+        let area: f64 = tris.iter().map(tri_area).sum();
+        let n = &el.nodes;
+        match el.kind {
+            ElementKind::Quad4 => {
+                for &a in n {
+                    *out.entry(a).or_insert(0.0) += area / 4.0;
+                }
             }
-        } else {
-            for t in &tris {
-                let area = tri_area(t);
-                for &a in t {
+            ElementKind::Tri6 => {
+                for (corner, sides) in [(0, [3, 5]), (1, [3, 4]), (2, [4, 5])] {
+                    out.entry(n[corner]).or_insert(0.0);
+                    let near = proxies.entry(n[corner]).or_default();
+                    near.extend(sides.map(|k| n[k]));
+                }
+                for &a in &n[3..6] {
+                    *out.entry(a).or_insert(0.0) += area / 3.0;
+                }
+            }
+            _ => {
+                for &a in n {
                     *out.entry(a).or_insert(0.0) += area / 3.0;
                 }
             }
         }
     }
-    out
+    for near in proxies.values_mut() {
+        near.sort_unstable();
+        near.dedup();
+    }
+    (out, proxies)
 }
 
 fn edge_lengths(mesh: &Mesh, facets: &[[u32; 3]]) -> (f64, f64) {
@@ -473,29 +497,39 @@ pub fn resolve(
             ));
         }
     }
-    let s_areas = nodal_areas(mesh, &slave_faces);
+    let (s_areas, s_proxies) = nodal_areas(mesh, &slave_faces);
     let areas = slaves
         .iter()
         .map(|a| s_areas.get(a).copied().unwrap_or(0.0))
         .collect();
+    let proxies = slaves
+        .iter()
+        .map(|a| s_proxies.get(a).cloned().unwrap_or_default())
+        .collect();
     let mut passes = vec![Pass {
         slaves,
         areas,
+        proxies,
         surface,
         face_tags: m_tags,
         radius: h_max,
     }];
     if def.two_pass {
-        let m_areas = nodal_areas(mesh, &master.elements);
+        let (m_areas, m_proxies) = nodal_areas(mesh, &master.elements);
         let mut m_nodes: Vec<usize> = m_areas.keys().copied().collect();
         m_nodes.sort_unstable();
         let areas = m_nodes.iter().map(|a| m_areas[a]).collect();
+        let proxies = m_nodes
+            .iter()
+            .map(|a| m_proxies.get(a).cloned().unwrap_or_default())
+            .collect();
         let (_, s_max) = edge_lengths(mesh, &s_facets);
         let surface = Surface::new(s_facets, mesh.nodes.len())
             .map_err(|e| vec![surface_error(&name, &e, &s_tags, mesh)])?;
         passes.push(Pass {
             slaves: m_nodes,
             areas,
+            proxies,
             surface,
             face_tags: s_tags,
             radius: s_max,
