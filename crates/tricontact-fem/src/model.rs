@@ -241,8 +241,8 @@ pub struct ContactDef {
     /// Initial penetrations up to this distance are removed by moving slave
     /// nodes onto the master surface (strain-free).
     pub adjust: Option<f64>,
-    /// Augmented Lagrangian: largest penetration allowed, relative to the
-    /// mean master facet edge length.
+    /// Augmented Lagrangian: largest gap `|P|` of a closed node allowed,
+    /// relative to the mean master facet edge length.
     #[serde(default = "default_contact_tolerance")]
     pub tolerance: f64,
     /// Keep each node's facet, shape functions and normal from the start of

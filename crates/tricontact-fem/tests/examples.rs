@@ -339,7 +339,7 @@ fn contact_block_far_from_the_origin_converges_as_at_it() {
 }
 
 /// An augmented-Lagrangian tolerance below what the Uzawa updates can reach: the failure names
-/// the pair, the penetration reached and the key to raise.
+/// the pair, the gap reached and the key to raise.
 #[test]
 fn an_unreachable_augmented_tolerance_is_named() {
     let (_, mut an) = example("patch", "augmented.toml", Some("matching-hex.msh"));
@@ -351,7 +351,9 @@ fn an_unreachable_augmented_tolerance_is_named() {
     let pair = &an.contacts[0].name;
     assert!(
         msg.contains("outer (Uzawa) loop not converged in 50 solves")
-            && msg.contains(&format!("contact '{pair}': largest penetration "))
+            && msg.contains(&format!(
+                "contact '{pair}': largest gap |P| of a closed node "
+            ))
             && msg.contains("raise its `tolerance`"),
         "{msg}"
     );

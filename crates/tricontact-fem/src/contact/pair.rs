@@ -64,7 +64,7 @@ pub struct ContactPair {
     pub method: ContactMethod,
     /// Penalty factor `α` (force per length).
     pub penalty: f64,
-    /// Largest penetration allowed by the augmented Lagrangian (length).
+    /// Largest gap `|P|` of a closed node allowed by the augmented Lagrangian (length).
     pub tolerance: f64,
     /// Mean master facet edge length.
     pub facet_size: f64,

@@ -30,7 +30,7 @@
 //! ```
 //!
 //! (for `λ_k = 0` this is the penalty method). After convergence the estimate is updated,
-//! `λ_{k+1} = min(0, λ̂)`, until the largest penetration is below the tolerance.
+//! `λ_{k+1} = min(0, λ̂)`, until every closed node's gap `|P|` is below the tolerance.
 
 use crate::error::GeometryError;
 use crate::linalg::{Mat12, Vec12};
