@@ -186,7 +186,9 @@ impl LinearSolver {
     /// Factors `a` by the first of the methods its [`Structure`] allows that succeeds.
     ///
     /// # Errors
-    /// [`Singular`] when LU fails too.
+    /// [`Singular`] when LU fails too. LU with partial pivoting does not detect every singular
+    /// matrix (an all-zero one factors): a solve then gives values that are not finite, which
+    /// the Newton solver reports as a singular tangent.
     pub fn factor(
         &mut self,
         a: SparseColMatRef<'_, usize, f64>,

@@ -148,12 +148,17 @@ fn range(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
     if log {
         return (lo.floor(), hi.ceil().max(lo.floor() + 1.0));
     }
+    // Each end scaled before the difference, and the padded ends kept finite: a span beyond
+    // `f64::MAX` made an infinite range, on which the chart never finished.
     let pad = if hi > lo {
-        0.05 * (hi - lo)
+        0.05 * hi - 0.05 * lo
     } else {
         0.5 * hi.abs().max(1.0)
     };
-    (lo - pad, hi + pad)
+    (
+        (lo - pad).max(f64::MIN / 2.0),
+        (hi + pad).min(f64::MAX / 2.0),
+    )
 }
 
 /// A tick label with at most four significant digits, trailing zeros removed.
@@ -310,6 +315,9 @@ mod tests {
         let (lo, hi) = range([2.0, 2.0].into_iter(), false);
         assert!(lo < 2.0 && hi > 2.0);
         assert_eq!(range([-9.5, 0.0].into_iter(), true), (-10.0, 0.0));
+        // A span beyond f64::MAX: padded, finite, and its width too.
+        let (lo, hi) = range([-1e308, 1e308].into_iter(), false);
+        assert!(lo < 0.0 && hi > 0.0 && (hi - lo).is_finite(), "{lo} {hi}");
     }
 
     #[test]
