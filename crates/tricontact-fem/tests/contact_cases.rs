@@ -88,7 +88,11 @@ fn interior_edge_and_vertex_nodes_get_the_same_force() {
     }
 }
 
-fn press_release(method: &str, release: usize) -> (Analysis, Vec<(f64, f64, Vec<f64>)>) {
+/// The block pressed by 0.01 in two increments, then its top moved to `z` in `increments`: per
+/// increment, the normal force, the closed nodes, and every node's gap and contact status.
+type Pressed = (f64, f64, Vec<f64>, Vec<f64>);
+
+fn press_then(method: &str, z: f64, increments: usize) -> (Analysis, Vec<Pressed>) {
     let mesh = small_blocks(ElementKind::Hex8);
     let text = format!(
         r#"{MAT}
@@ -101,16 +105,16 @@ displacement = {{ x = 0.0, y = 0.0, z = -0.01 }}
 steps = ["press"]
 [[boundary]]
 group = "upper_zmax"
-displacement = {{ x = 0.0, y = 0.0, z = 0.01 }}
-steps = ["release"]
+displacement = {{ x = 0.0, y = 0.0, z = {z} }}
+steps = ["then"]
 {}
 [[step]]
 name = "press"
 increments = 2
 nlgeom = true
 [[step]]
-name = "release"
-increments = {release}
+name = "then"
+increments = {increments}
 nlgeom = true
 "#,
         contact(method, "")
@@ -125,50 +129,6 @@ nlgeom = true
                 .find(|(n, _)| n.ends_with(k))
                 .map_or(f64::NAN, |(_, v)| *v)
         };
-        let gaps = info
-            .point_fields
-            .iter()
-            .find(|(n, _, _)| n == "contact_gap")
-            .map(|(_, _, v)| v.clone())
-            .unwrap_or_default();
-        out.push((get("_normal_force"), get("_active"), gaps));
-        Ok(())
-    })
-    .expect("run");
-    (an, out)
-}
-
-/// The block pressed, then backed off part of the way (still in contact): each increment's
-/// normal force and, for every closed slave node, its gap `P`.
-fn press_back_off(method: &str) -> (Analysis, Vec<(f64, Vec<f64>)>) {
-    let mesh = small_blocks(ElementKind::Hex8);
-    let text = format!(
-        r#"{MAT}
-[[boundary]]
-group = "lower_zmin"
-fix = ["x", "y", "z"]
-[[boundary]]
-group = "upper_zmax"
-displacement = {{ x = 0.0, y = 0.0, z = -0.01 }}
-steps = ["press"]
-[[boundary]]
-group = "upper_zmax"
-displacement = {{ x = 0.0, y = 0.0, z = -0.004 }}
-steps = ["back"]
-{}
-[[step]]
-name = "press"
-increments = 2
-[[step]]
-name = "back"
-increments = 2
-"#,
-        contact(method, "")
-    );
-    let an = common::analysis(mesh, &text);
-    let mut terms = ContactTerms::new(&an);
-    let mut out = Vec::new();
-    tricontact_fem::driver::run(&an, &mut terms, &mut |info| {
         let field = |k: &str| {
             info.point_fields
                 .iter()
@@ -176,23 +136,40 @@ increments = 2
                 .map(|(_, _, v)| v.clone())
                 .unwrap_or_default()
         };
-        let (gap, status) = (field("contact_gap"), field("contact_status"));
-        let closed = gap
-            .iter()
-            .zip(&status)
-            .filter(|&(_, &s)| s == 1.0)
-            .map(|(&g, _)| g)
-            .collect();
-        let force = info
-            .history
-            .iter()
-            .find(|(n, _)| n.ends_with("_normal_force"))
-            .map_or(f64::NAN, |(_, v)| *v);
-        out.push((force, closed));
+        out.push((
+            get("_normal_force"),
+            get("_active"),
+            field("contact_gap"),
+            field("contact_status"),
+        ));
         Ok(())
     })
     .expect("run");
     (an, out)
+}
+
+/// The block pressed, then pulled back to 0.01 above its start in `release` increments.
+fn press_release(method: &str, release: usize) -> (Analysis, Vec<Pressed>) {
+    press_then(method, 0.01, release)
+}
+
+/// The block pressed, then backed off part of the way (still in contact): each increment's
+/// normal force and, for every closed slave node, its gap `P`.
+fn press_back_off(method: &str) -> (Analysis, Vec<(f64, Vec<f64>)>) {
+    let (an, rec) = press_then(method, -0.004, 2);
+    let closed = rec
+        .into_iter()
+        .map(|(force, _, gap, status)| {
+            let gaps = gap
+                .iter()
+                .zip(&status)
+                .filter(|&(_, &s)| s == 1.0)
+                .map(|(&g, _)| g)
+                .collect();
+            (force, gaps)
+        })
+        .collect();
+    (an, closed)
 }
 
 /// Backing off, the augmented Lagrangian's multipliers from the pressed state hold nodes closed
