@@ -402,10 +402,9 @@ fn block_pressed_on_a_convex_edge_stays_within_the_tolerance() {
 }
 
 /// Largest relative deviation of the slave pressure from `p` on unrelated meshes.
-fn non_matching(method: &str, two_pass: bool) -> f64 {
-    let l = box_mesh([1.0, 1.0, 0.5], [3, 3, 1], ElementKind::Tet4);
-    let u = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
-    let mesh = tricontact_fem::structured::stack(&l, &u, [0.0, 0.0, 0.5]);
+/// The contact patch test's model: both blocks held laterally on their sides, the lower one on
+/// its base, a uniform pressure 1 on the upper one's top, and the pair with `extra` keys.
+fn patch_model(method: &str, extra: &str) -> String {
     let mut text = format!("{MAT}[[load]]\ngroup = \"upper_zmax\"\npressure = 1.0\n");
     for side in ["lower", "upper"] {
         for (g, c) in [("xmin", "x"), ("xmax", "x"), ("ymin", "y"), ("ymax", "y")] {
@@ -413,14 +412,20 @@ fn non_matching(method: &str, two_pass: bool) -> f64 {
         }
     }
     text += "[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"z\"]\n";
+    text += &contact(method, extra);
+    text + "[[step]]\nresidual_tolerance = 1e-10\n"
+}
+
+fn non_matching(method: &str, two_pass: bool) -> f64 {
+    let l = box_mesh([1.0, 1.0, 0.5], [3, 3, 1], ElementKind::Tet4);
+    let u = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
+    let mesh = tricontact_fem::structured::stack(&l, &u, [0.0, 0.0, 0.5]);
     let extra = if two_pass {
         "two_pass = true\ntolerance = 1e-10"
     } else {
         "tolerance = 1e-10"
     };
-    text += &contact(method, extra);
-    text += "[[step]]\nresidual_tolerance = 1e-10\n";
-    let an = common::analysis(mesh, &text);
+    let an = common::analysis(mesh, &patch_model(method, extra));
     let (terms, _, _) = common::solve_contact(&an);
     let pass = &an.contacts[0].passes[0];
     let mut worst = 0.0f64;
@@ -869,17 +874,8 @@ fn quadratic_contact_surfaces_carry_the_uniform_pressure() {
     let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Tet10);
     let u = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Tet10);
     let mesh = tricontact_fem::structured::stack(&l, &u, [0.0, 0.0, 0.5]);
-    let mut text = format!("{MAT}[[load]]\ngroup = \"upper_zmax\"\npressure = 1.0\n");
-    for side in ["lower", "upper"] {
-        for (g, c) in [("xmin", "x"), ("xmax", "x"), ("ymin", "y"), ("ymax", "y")] {
-            text += &format!("[[boundary]]\ngroup = \"{side}_{g}\"\nfix = [\"{c}\"]\n");
-        }
-    }
-    text += "[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"z\"]\n";
     for method in ["penalty", "multiplier", "augmented"] {
-        let text = text.clone()
-            + &contact(method, "tolerance = 1e-10")
-            + "[[step]]\nresidual_tolerance = 1e-10\n";
+        let text = patch_model(method, "tolerance = 1e-10");
         let an = common::analysis(mesh.clone(), &text);
         let (terms, _, _) = common::solve_contact(&an);
         let fields = terms.fields();
