@@ -296,79 +296,77 @@ impl ResultWriter {
 
     /// Writes the `.vtu` of `info` and rewrites the `.pvd`.
     fn write_vtu(&mut self, an: &Analysis, info: &State<'_>) -> Result<()> {
-        {
-            let name = format!(
-                "{}_{:03}_{:04}.vtu",
-                self.stem,
-                info.step + 1,
-                info.increment
-            );
-            let n = an.mesh.nodes.len();
-            let fields = stress_fields(an, info.u, info.nlgeom);
-            let material: Vec<f64> = an.body.iter().map(|b| b.material as f64).collect();
-            let mut point_data = vec![
-                Field {
-                    name: "displacement",
-                    components: 3,
-                    values: &info.u[..3 * n],
-                },
-                Field {
-                    name: "reaction",
-                    components: 3,
-                    values: &info.reactions[..3 * n],
-                },
+        let name = format!(
+            "{}_{:03}_{:04}.vtu",
+            self.stem,
+            info.step + 1,
+            info.increment
+        );
+        let n = an.mesh.nodes.len();
+        let fields = stress_fields(an, info.u, info.nlgeom);
+        let material: Vec<f64> = an.body.iter().map(|b| b.material as f64).collect();
+        let mut point_data = vec![
+            Field {
+                name: "displacement",
+                components: 3,
+                values: &info.u[..3 * n],
+            },
+            Field {
+                name: "reaction",
+                components: 3,
+                values: &info.reactions[..3 * n],
+            },
+            Field {
+                name: "stress",
+                components: 6,
+                values: &fields.point_stress,
+            },
+            Field {
+                name: "von_mises",
+                components: 1,
+                values: &fields.point_von_mises,
+            },
+        ];
+        for (name, components, values) in info.point_fields {
+            point_data.push(Field {
+                name,
+                components: *components,
+                values,
+            });
+        }
+        let grid = Grid {
+            points: &an.mesh.nodes,
+            cells: &self.cells,
+            point_data,
+            cell_data: vec![
                 Field {
                     name: "stress",
                     components: 6,
-                    values: &fields.point_stress,
+                    values: &fields.cell_stress,
                 },
                 Field {
                     name: "von_mises",
                     components: 1,
-                    values: &fields.point_von_mises,
+                    values: &fields.cell_von_mises,
                 },
-            ];
-            for (name, components, values) in info.point_fields {
-                point_data.push(Field {
-                    name,
-                    components: *components,
-                    values,
-                });
-            }
-            let grid = Grid {
-                points: &an.mesh.nodes,
-                cells: &self.cells,
-                point_data,
-                cell_data: vec![
-                    Field {
-                        name: "stress",
-                        components: 6,
-                        values: &fields.cell_stress,
-                    },
-                    Field {
-                        name: "von_mises",
-                        components: 1,
-                        values: &fields.cell_von_mises,
-                    },
-                    Field {
-                        name: "material",
-                        components: 1,
-                        values: &material,
-                    },
-                ],
-            };
-            let xml = vtu_string(&grid, an.output.vtu_format)
-                .map_err(|e| FemError::Output(e.to_string()))?;
-            let path = self.dir.join(&name);
-            write_atomic(&path, xml.as_bytes())?;
-            self.written.push(path);
-            self.pvd.push((info.time, name));
-            let pvd = pvd_string(&self.pvd).map_err(|e| FemError::Output(e.to_string()))?;
-            let p = self.dir.join(format!("{}.pvd", self.stem));
-            write_atomic(&p, pvd.as_bytes())?;
-            if !self.written.contains(&p) {
-                self.written.push(p);
-            }
+                Field {
+                    name: "material",
+                    components: 1,
+                    values: &material,
+                },
+            ],
+        };
+        let xml =
+            vtu_string(&grid, an.output.vtu_format).map_err(|e| FemError::Output(e.to_string()))?;
+        let path = self.dir.join(&name);
+        write_atomic(&path, xml.as_bytes())?;
+        self.written.push(path);
+        self.pvd.push((info.time, name));
+        let pvd = pvd_string(&self.pvd).map_err(|e| FemError::Output(e.to_string()))?;
+        let p = self.dir.join(format!("{}.pvd", self.stem));
+        write_atomic(&p, pvd.as_bytes())?;
+        if !self.written.contains(&p) {
+            self.written.push(p);
         }
         Ok(())
     }
