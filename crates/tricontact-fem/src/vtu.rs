@@ -177,11 +177,40 @@ fn fields<W: std::io::Write>(
     Ok(())
 }
 
+/// A grid whose parts disagree: a field without one tuple per point or cell, a cell naming a
+/// missing point. ParaView reads such a file wrongly or not at all.
+fn check_grid(g: &Grid<'_>) -> std::io::Result<()> {
+    let bad = |m: String| Err(std::io::Error::new(std::io::ErrorKind::InvalidInput, m));
+    let n = g.points.len();
+    if let Some(c) = g.cells.iter().position(|c| c.1.iter().any(|&a| a >= n)) {
+        return bad(format!("cell {c} names a point beyond the {n} points"));
+    }
+    for (list, count, what) in [
+        (&g.point_data, n, "points"),
+        (&g.cell_data, g.cells.len(), "cells"),
+    ] {
+        for f in list {
+            if f.components == 0 || f.values.len() != f.components * count {
+                return bad(format!(
+                    "field '{}' holds {} values, not {} components for each of {count} {what}",
+                    f.name,
+                    f.values.len(),
+                    f.components
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Serializes a grid as VTU XML, its data arrays in `format`.
 ///
 /// # Errors
-/// Only from the in-memory writer (practically none).
+/// [`std::io::ErrorKind::InvalidInput`] for a grid whose parts disagree (a field without one
+/// tuple per point or cell, a cell naming a missing point); otherwise only from the in-memory
+/// writer (practically none).
 pub fn vtu_string(g: &Grid<'_>, format: VtuFormat) -> std::io::Result<String> {
+    check_grid(g)?;
     let mut w = Writer::new_with_indent(Vec::new(), b' ', 1);
     w.write_event(quick_xml::events::Event::Decl(
         quick_xml::events::BytesDecl::new("1.0", None, None),
@@ -229,8 +258,20 @@ pub fn vtu_string(g: &Grid<'_>, format: VtuFormat) -> std::io::Result<String> {
 /// Serializes a `.pvd` collection of `(time, file name)` entries.
 ///
 /// # Errors
-/// Only from the in-memory writer.
+/// [`std::io::ErrorKind::InvalidInput`] for a time that is not finite or is below the one
+/// before (ParaView plays the files in time order); otherwise only from the in-memory writer.
 pub fn pvd_string(entries: &[(f64, String)]) -> std::io::Result<String> {
+    if let Some(k) = (0..entries.len())
+        .find(|&k| !entries[k].0.is_finite() || (k > 0 && entries[k].0 < entries[k - 1].0))
+    {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!(
+                "time {} of '{}' is not finite or is below the one before",
+                entries[k].0, entries[k].1
+            ),
+        ));
+    }
     let mut w = Writer::new_with_indent(Vec::new(), b' ', 1);
     w.write_event(quick_xml::events::Event::Decl(
         quick_xml::events::BytesDecl::new("1.0", None, None),
@@ -287,6 +328,29 @@ mod tests {
         assert!(s.contains("0.1 0.2 0.3"));
         let p = pvd_string(&[(0.5, "a.vtu".into())]).expect("xml");
         assert!(p.contains("timestep=\"0.5\""));
+        // Parts that disagree are refused, not written.
+        let short = Grid {
+            point_data: vec![Field {
+                name: "displacement",
+                components: 3,
+                values: &u[..9],
+            }],
+            ..g.clone()
+        };
+        let e = vtu_string(&short, VtuFormat::Ascii).expect_err("short field");
+        assert!(
+            e.to_string()
+                .contains("field 'displacement' holds 9 values"),
+            "{e}"
+        );
+        let wild = vec![vtk_cell(ElementKind::Tet4, &[0, 1, 2, 7])];
+        let e = vtu_string(&Grid { cells: &wild, ..g }, VtuFormat::Ascii).expect_err("cell");
+        assert!(e.to_string().contains("cell 0 names a point"), "{e}");
+        for times in [[0.5, f64::NAN], [0.5, 0.25]] {
+            let entries: Vec<(f64, String)> =
+                times.iter().map(|&t| (t, "a.vtu".to_string())).collect();
+            assert!(pvd_string(&entries).is_err(), "{times:?}");
+        }
         assert!(p.contains("file=\"a.vtu\""));
     }
 
