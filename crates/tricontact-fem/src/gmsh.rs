@@ -120,6 +120,25 @@ fn kind_of(t: ElementType) -> Option<ElementKind> {
 /// Largest coordinate magnitude accepted: element volumes (cubes of lengths) stay finite.
 pub const MAX_COORDINATE: f64 = 1e100;
 
+/// What is wrong with a node's coordinates, if anything: one that is not finite, or one beyond
+/// ±[`MAX_COORDINATE`]. The reader and [`crate::mesh::Mesh::check`] apply the same rule.
+#[must_use]
+pub fn coordinate_fault(x: &[f64; 3]) -> Option<String> {
+    if !x.iter().all(|c| c.is_finite()) {
+        return Some(format!(
+            "a non-finite coordinate ({}, {}, {})",
+            x[0], x[1], x[2]
+        ));
+    }
+    // Volumes are cubes of lengths: beyond this they overflow.
+    x.iter().any(|c| c.abs() > MAX_COORDINATE).then(|| {
+        format!(
+            "a coordinate beyond ±{MAX_COORDINATE:e} ({:e}, {:e}, {:e})",
+            x[0], x[1], x[2]
+        )
+    })
+}
+
 /// Parses the bytes of a `.msh` file (`path` is used in messages only).
 ///
 /// # Errors
@@ -220,18 +239,8 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<Mesh> {
             }
             for (node, tag) in block.nodes.iter().zip(block_tags) {
                 let x = [node.x, node.y, node.z];
-                if !x.iter().all(|c| c.is_finite()) {
-                    return Err(merr(format!(
-                        "node {tag} has a non-finite coordinate ({}, {}, {})",
-                        x[0], x[1], x[2]
-                    )));
-                }
-                // Volumes are cubes of lengths: beyond this they overflow.
-                if x.iter().any(|c| c.abs() > MAX_COORDINATE) {
-                    return Err(merr(format!(
-                        "node {tag} has a coordinate beyond ±{MAX_COORDINATE:e} ({:e}, {:e}, {:e})",
-                        x[0], x[1], x[2]
-                    )));
+                if let Some(fault) = coordinate_fault(&x) {
+                    return Err(merr(format!("node {tag} has {fault}")));
                 }
                 if tag_to_index.insert(tag, mesh.nodes.len()).is_some() {
                     return Err(merr(format!("node tag {tag} is defined twice")));

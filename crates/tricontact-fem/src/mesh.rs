@@ -114,7 +114,8 @@ pub struct Mesh {
 
 impl Mesh {
     /// Checks what the Gmsh reader guarantees, for a mesh built by other code: every coordinate
-    /// finite and within ±[`crate::gmsh::MAX_COORDINATE`], a tag per node, every element with the
+    /// finite and within ±[`crate::gmsh::MAX_COORDINATE`] ([`crate::gmsh::coordinate_fault`]), a
+    /// tag per node, every element with the
     /// node count of its kind and its nodes in range, every group's nodes and elements in range.
     ///
     /// # Errors
@@ -128,17 +129,10 @@ impl Mesh {
                 self.nodes.len()
             ));
         }
-        let limit = crate::gmsh::MAX_COORDINATE;
-        if let Some((a, x)) = self
-            .nodes
-            .iter()
-            .enumerate()
-            .find(|(_, x)| !x.iter().all(|c| c.abs() <= limit))
-        {
-            return invalid(format!(
-                "node {} has a coordinate that is not finite or beyond ±{limit:e} ({:e}, {:e}, {:e})",
-                self.node_tags[a], x[0], x[1], x[2]
-            ));
+        for (x, tag) in self.nodes.iter().zip(&self.node_tags) {
+            if let Some(fault) = crate::gmsh::coordinate_fault(x) {
+                return invalid(format!("node {tag} has {fault}"));
+            }
         }
         let n = self.nodes.len();
         for e in &self.elements {

@@ -572,18 +572,29 @@ fn a_mesh_built_in_code_is_checked_like_a_read_one() {
     nan.nodes[3][1] = f64::NAN;
     let mut out_of_range = good.clone();
     out_of_range.elements[0].nodes[2] = 99;
+    let element = good.elements[0].tag;
     let mut short = good.clone();
     short.elements[0].nodes.truncate(3);
     let mut group = good.clone();
     group.groups[0].nodes.push(99);
+    let name = good.groups[0].name.clone();
+    let mut group_element = good.clone();
+    group_element.groups[0].elements.push(42);
+    let mut untagged = good.clone();
+    untagged.node_tags.pop();
     for (mesh, expected) in [
+        (nan, format!("node {tag} has a non-finite coordinate")),
         (
-            nan,
-            format!("node {tag} has a coordinate that is not finite"),
+            out_of_range,
+            format!("element {element} names node index 99 of 8"),
         ),
-        (out_of_range, "names node index 99 of 8".to_string()),
         (short, "has 3 nodes, not 8".to_string()),
-        (group, "names node index 99 of 8".to_string()),
+        (group, format!("group '{name}' names node index 99 of 8")),
+        (
+            group_element,
+            format!("group '{name}' names element index 42"),
+        ),
+        (untagged, "7 node tags for 8 nodes".to_string()),
     ] {
         let msg = Analysis::new(&model, mesh)
             .expect_err("bad mesh")
