@@ -117,7 +117,7 @@ fn main() -> ExitCode {
             verbose,
             threads,
         } => set_threads(threads)
-            .and_then(|()| run(&model, output, mesh, verbose).map_err(|e| e.to_string())),
+            .and_then(|()| run(&model, output, mesh, verbose).map_err(|e| describe(&e))),
         Command::Check { model, mesh } => check(&model, mesh).map_err(|e| e.to_string()),
         Command::Export {
             model,
@@ -138,6 +138,22 @@ fn main() -> ExitCode {
             eprintln!("error: {e}");
             ExitCode::FAILURE
         }
+    }
+}
+
+/// An error's text for the terminal: a model's several problems one per line (`check` lists them
+/// itself, then ends with the one-line form).
+fn describe(e: &FemError) -> String {
+    match e {
+        FemError::Invalid(list) if list.len() > 1 => {
+            let mut text = format!("invalid model, {} problems:", list.len());
+            for m in list {
+                text.push_str("\n  - ");
+                text.push_str(m);
+            }
+            text
+        }
+        other => other.to_string(),
     }
 }
 
@@ -200,7 +216,9 @@ fn run(
     let hertz = model
         .hertz
         .as_ref()
-        .map(|h| HertzSetup::resolve(h, &an))
+        .map(|h| {
+            HertzSetup::resolve(h, &an).map_err(|e| e.placed(&model.source.at("hertz", 0, "")))
+        })
         .transpose()?;
     let mut record = RunRecord::new(hertz);
     let dir = output.unwrap_or_else(|| model.output_dir());
@@ -407,7 +425,7 @@ fn check(model_path: &Path, mesh_override: Option<PathBuf>) -> Result<(), FemErr
         && an.contacts.len() == model.contacts.len()
         && let Err(e) = HertzSetup::resolve(h, &an)
     {
-        problems.push(e);
+        problems.push(e.placed(&model.source.at("hertz", 0, "")));
     }
     for pair in &an.contacts {
         let facets: usize = pair.passes.iter().map(|p| p.surface.len()).sum();

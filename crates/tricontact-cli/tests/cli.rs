@@ -639,18 +639,61 @@ fn threads_beyond_the_cores_are_capped() {
     );
 }
 
-/// `check` lists every problem once, and its final error line has one `invalid model:` prefix.
-#[test]
-fn check_lists_several_problems_with_one_prefix() {
-    let dir = temp_dir("check-many");
+/// The cantilever example with two problems (`nu = 0.7`; two steps named `bend`), written to a
+/// folder of its own: the model's path, and the prefixes (`"  - model.toml:N: "`, as listed) of
+/// the two problems' messages, at the lines of `nu` and of the second step's name.
+fn two_problem_model(name: &str) -> (PathBuf, [String; 2]) {
+    let dir = temp_dir(name);
     let src = std::fs::read_to_string(example()).expect("model");
     let mesh = example().with_file_name("beam.msh");
     let src = src
         .replace("\"beam.msh\"", &format!("{mesh:?}"))
         .replace("nu = 0.3", "nu = 0.7")
         .replace("name = \"release-pressure\"", "name = \"bend\"");
+    let lines = |key: &str| {
+        src.lines()
+            .enumerate()
+            .filter(|(_, l)| l.starts_with(key))
+            .map(|(i, _)| i + 1)
+            .collect::<Vec<_>>()
+    };
+    let (nu, names) = (lines("nu ="), lines("name = \"bend\""));
+    assert_eq!((nu.len(), names.len()), (1, 2), "{src}");
     let model = dir.join("model.toml");
-    std::fs::write(&model, src).expect("write");
+    std::fs::write(&model, &src).expect("write");
+    let at = |line: usize| format!("  - {}:{line}: ", model.display());
+    let prefixes = [
+        at(nu[0]) + "material",
+        at(names[1]) + "step name 'bend' is used twice",
+    ];
+    (model, prefixes)
+}
+
+/// `run` lists a model's several problems one per line, each with the line of its key.
+#[test]
+fn run_lists_several_problems_with_their_lines() {
+    let (model, prefixes) = two_problem_model("run-many");
+    let o = bin()
+        .args(["run".as_ref(), model.as_os_str()])
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines[0], "error: invalid model, 2 problems:", "{stderr}");
+    for p in &prefixes {
+        assert!(
+            lines[1..].iter().any(|l| l.starts_with(p)),
+            "{p} in {stderr}"
+        );
+    }
+}
+
+/// `check` lists every problem once, each with the line of its key, and its final error line
+/// has one `invalid model:` prefix.
+#[test]
+fn check_lists_several_problems_with_one_prefix() {
+    let (model, prefixes) = two_problem_model("check-many");
     let o = bin()
         .args(["check".as_ref(), model.as_os_str()])
         .output()
@@ -661,10 +704,9 @@ fn check_lists_several_problems_with_one_prefix() {
     );
     assert!(!o.status.success());
     assert!(stdout.contains("2 problem(s):"), "{stdout}");
-    assert!(
-        stdout.contains("  - step name 'bend' is used twice"),
-        "{stdout}"
-    );
+    for p in &prefixes {
+        assert!(stdout.lines().any(|l| l.starts_with(p)), "{p} in {stdout}");
+    }
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
     assert_eq!(stderr.matches("invalid model").count(), 1, "{stderr}");
 }

@@ -260,12 +260,16 @@ impl Analysis {
     #[must_use]
     pub fn build(model: &Model, mut mesh: Mesh) -> (Self, Vec<FemError>) {
         let mut problems: Vec<FemError> = Vec::new();
-        let unknown = |kind: &'static str, name: &str, mesh: &Mesh| FemError::UnknownGroup {
-            kind,
-            name: name.to_string(),
-            available: mesh.group_list(),
-        };
+        let unknown =
+            |at: String, kind: &'static str, name: &str, mesh: &Mesh| FemError::UnknownGroup {
+                at,
+                kind,
+                name: name.to_string(),
+                available: mesh.group_list(),
+            };
         let invalid = |s: String| FemError::Invalid(vec![s]);
+        // The place of a key in the model file, to start a message with.
+        let src = &model.source;
 
         // Steps.
         if model.steps.is_empty() {
@@ -289,11 +293,16 @@ impl Analysis {
             .collect();
         for (i, s) in steps.iter().enumerate() {
             if s.name.trim().is_empty() {
-                problems.push(invalid(format!("step {}: the name is empty", i + 1)));
+                problems.push(invalid(format!(
+                    "{}step {}: the name is empty",
+                    src.at("step", i, "name"),
+                    i + 1
+                )));
             }
             if steps[..i].iter().any(|t| t.name == s.name) {
                 problems.push(invalid(format!(
-                    "step name '{}' is used twice (`steps = [...]` must name one step)",
+                    "{}step name '{}' is used twice (`steps = [...]` must name one step)",
+                    src.at("step", i, "name"),
                     s.name
                 )));
             }
@@ -304,7 +313,8 @@ impl Analysis {
             ] {
                 if !(low..=high).contains(&value) {
                     problems.push(invalid(format!(
-                        "step '{}': {key} must be from {low} to {high} (got {value})",
+                        "{}step '{}': {key} must be from {low} to {high} (got {value})",
+                        src.at("step", i, key),
                         s.name
                     )));
                 }
@@ -315,7 +325,8 @@ impl Analysis {
             ] {
                 if !(value > 0.0 && value < 1.0) {
                     problems.push(invalid(format!(
-                        "step '{}': {key} must be > 0 and < 1 (got {value})",
+                        "{}step '{}': {key} must be > 0 and < 1 (got {value})",
+                        src.at("step", i, key),
                         s.name
                     )));
                 }
@@ -358,12 +369,23 @@ impl Analysis {
         let mut mat_index = HashMap::new();
         for (i, m) in model.materials.iter().enumerate() {
             if m.name.trim().is_empty() {
-                problems.push(invalid(format!("material {}: the name is empty", i + 1)));
+                problems.push(invalid(format!(
+                    "{}material {}: the name is empty",
+                    src.at("material", i, "name"),
+                    i + 1
+                )));
             }
             let valid = m.e > 1.0 / MAX_MODULUS && m.e < MAX_MODULUS && m.nu > -1.0 && m.nu < 0.5;
             if !valid {
+                let modulus_valid = m.e > 1.0 / MAX_MODULUS && m.e < MAX_MODULUS;
+                let keys: &[&str] = if modulus_valid {
+                    &["nu", "poisson_ratio"]
+                } else {
+                    &["E", "youngs_modulus"]
+                };
                 problems.push(invalid(format!(
-                    "material '{}': need 1e-100 < E < 1e100 and -1 < nu < 0.5 (got E = {:e}, nu = {})",
+                    "{}material '{}': need 1e-100 < E < 1e100 and -1 < nu < 0.5 (got E = {:e}, nu = {})",
+                    src.at_first("material", i, keys),
                     m.name,
                     m.e,
                     // Plain for the usual values, in exponent form for absurd ones (1e300 was
@@ -376,7 +398,11 @@ impl Analysis {
                 )));
             }
             if mat_index.insert(m.name.clone(), materials.len()).is_some() {
-                problems.push(invalid(format!("material '{}' defined twice", m.name)));
+                problems.push(invalid(format!(
+                    "{}material '{}' defined twice",
+                    src.at("material", i, "name"),
+                    m.name
+                )));
             }
             let law = match m.kind {
                 MaterialKind::LinearElastic => Law::LinearElastic,
@@ -398,12 +424,17 @@ impl Analysis {
         let mut owner_def: Vec<usize> = vec![usize::MAX; mesh.elements.len()];
         for (bi, b) in model.bodies.iter().enumerate() {
             if model.bodies[..bi].iter().any(|c| c.group == b.group) {
-                problems.push(invalid(format!("body group '{}' is listed twice", b.group)));
+                problems.push(invalid(format!(
+                    "{}body group '{}' is listed twice",
+                    src.at("body", bi, "group"),
+                    b.group
+                )));
                 continue;
             }
             let Some(&mi) = mat_index.get(&b.material) else {
                 problems.push(invalid(format!(
-                    "body '{}': unknown material '{}' (materials: {})",
+                    "{}body '{}': unknown material '{}' (materials: {})",
+                    src.at("body", bi, "material"),
                     b.group,
                     b.material,
                     model
@@ -415,10 +446,11 @@ impl Analysis {
                 )));
                 continue;
             };
+            let here = src.at("body", bi, "group");
             match mesh.lookup(&b.group, Some(3)) {
-                Err(m) => problems.push(invalid(format!("body: {m}"))),
+                Err(m) => problems.push(invalid(format!("{here}body: {m}"))),
                 Ok(Some(g)) if g.dim == 3 && g.elements.is_empty() => problems.push(invalid(
-                    format!("body '{}': the volume group has no elements", b.group),
+                    format!("{here}body '{}': the volume group has no elements", b.group),
                 )),
                 Ok(Some(g)) if g.dim == 3 => {
                     for &e in &g.elements {
@@ -438,16 +470,18 @@ impl Analysis {
                     }
                 }
                 Ok(Some(g)) => problems.push(invalid(format!(
-                    "body group '{}' has dimension {}, a volume (3D) group is needed",
+                    "{here}body group '{}' has dimension {}, a volume (3D) group is needed",
                     g.name, g.dim
                 ))),
-                Ok(None) => problems.push(unknown("volume", &b.group, &mesh)),
+                Ok(None) => problems.push(unknown(here, "volume", &b.group, &mesh)),
             }
         }
         for ((a, b), (count, tag)) in shared {
             problems.push(invalid(format!(
-                "bodies '{}' and '{}' share {count} element(s) (the first: Gmsh tag {tag}); an element belongs to one body",
-                model.bodies[a].group, model.bodies[b].group
+                "{}bodies '{}' and '{}' share {count} element(s) (the first: Gmsh tag {tag}); an element belongs to one body",
+                src.at("body", b, "group"),
+                model.bodies[a].group,
+                model.bodies[b].group
             )));
         }
         let bodies_ok = problems.len() == before_bodies;
@@ -538,7 +572,8 @@ impl Analysis {
                 let name = format!("{}-{}", c.slave, c.master);
                 if c.slave == c.master {
                     problems.push(invalid(format!(
-                        "contact '{name}': slave and master are the same group (self-contact is not supported)"
+                        "{}contact '{name}': slave and master are the same group (self-contact is not supported)",
+                        src.at("contact", i, "master")
                     )));
                     continue;
                 }
@@ -547,14 +582,18 @@ impl Analysis {
                     .any(|d| d.slave == c.slave && d.master == c.master)
                 {
                     problems.push(invalid(format!(
-                        "contact '{name}' is defined twice (its force would be applied twice)"
+                        "{}contact '{name}' is defined twice (its force would be applied twice)",
+                        src.at("contact", i, "")
                     )));
                     continue;
                 }
                 if !bodies_ok {
                     continue;
                 }
-                match crate::contact::pair::resolve(c, &mut moved, &bodies, &in_body, &mut rigid) {
+                let at = |key: &str| src.at("contact", i, key);
+                match crate::contact::pair::resolve(
+                    c, &mut moved, &bodies, &in_body, &mut rigid, &at,
+                ) {
                     Ok(p) => contacts.push(p),
                     Err(list) => problems.extend(list.into_iter().map(&invalid)),
                 }
@@ -573,16 +612,21 @@ impl Analysis {
 
         // Boundaries.
         let mut boundaries = Vec::new();
-        for b in &model.boundaries {
-            let active = step_mask(&b.steps, &format!("boundary '{}'", b.group), &mut problems);
+        for (bi, b) in model.boundaries.iter().enumerate() {
+            let at = |key: &str| src.at("boundary", bi, key);
+            let active = step_mask(
+                &b.steps,
+                &format!("{}boundary '{}'", at("steps"), b.group),
+                &mut problems,
+            );
             let g = match mesh.lookup(&b.group, None) {
                 Ok(Some(g)) => g,
                 Ok(None) => {
-                    problems.push(unknown("node", &b.group, &mesh));
+                    problems.push(unknown(at("group"), "node", &b.group, &mesh));
                     continue;
                 }
                 Err(m) => {
-                    problems.push(invalid(format!("boundary: {m}")));
+                    problems.push(invalid(format!("{}boundary: {m}", at("group"))));
                     continue;
                 }
             };
@@ -590,7 +634,8 @@ impl Analysis {
             for c in &b.fix {
                 if values[c.index()].is_some() {
                     problems.push(invalid(format!(
-                        "boundary '{}': component {} is listed twice in `fix`",
+                        "{}boundary '{}': component {} is listed twice in `fix`",
+                        at("fix"),
                         b.group,
                         ["x", "y", "z"][c.index()]
                     )));
@@ -602,14 +647,16 @@ impl Analysis {
                     if let Some(v) = v {
                         if values[i].is_some() {
                             problems.push(invalid(format!(
-                                "boundary '{}': component {} is both fixed and prescribed",
+                                "{}boundary '{}': component {} is both fixed and prescribed",
+                                at(&format!("displacement.{}", ["x", "y", "z"][i])),
                                 b.group,
                                 ["x", "y", "z"][i]
                             )));
                         }
                         if !v.is_finite() {
                             problems.push(invalid(format!(
-                                "boundary '{}': non-finite displacement",
+                                "{}boundary '{}': non-finite displacement",
+                                at(&format!("displacement.{}", ["x", "y", "z"][i])),
                                 b.group
                             )));
                         }
@@ -619,7 +666,8 @@ impl Analysis {
             }
             if values.iter().all(Option::is_none) {
                 problems.push(invalid(format!(
-                    "boundary '{}': give `fix` components or a `displacement`",
+                    "{}boundary '{}': give `fix` components or a `displacement`",
+                    at(""),
                     b.group
                 )));
             }
@@ -631,7 +679,8 @@ impl Analysis {
                 .collect();
             if nodes.is_empty() && nodes_known {
                 problems.push(invalid(format!(
-                    "boundary '{}': the group has no node of any body",
+                    "{}boundary '{}': the group has no node of any body",
+                    at("group"),
                     b.group
                 )));
             }
@@ -701,8 +750,13 @@ impl Analysis {
             body.iter().map(|b| &mesh.elements[b.element]).collect();
         let node_elems = loads::node_to_elements(mesh.nodes.len(), &body_refs);
         let mut load_list = Vec::new();
-        for l in &model.loads {
-            let active = step_mask(&l.steps, &format!("load '{}'", l.group), &mut problems);
+        for (li, l) in model.loads.iter().enumerate() {
+            let at = |key: &str| src.at("load", li, key);
+            let active = step_mask(
+                &l.steps,
+                &format!("{}load '{}'", at("steps"), l.group),
+                &mut problems,
+            );
             let g = match mesh.lookup(&l.group, l.pressure.is_some().then_some(2)) {
                 Ok(Some(g)) => g,
                 Ok(None) => {
@@ -711,19 +765,25 @@ impl Analysis {
                     } else {
                         "node"
                     };
-                    problems.push(unknown(kind, &l.group, &mesh));
+                    problems.push(unknown(at("group"), kind, &l.group, &mesh));
                     continue;
                 }
                 Err(m) => {
-                    problems.push(invalid(format!("load: {m}")));
+                    problems.push(invalid(format!("{}load: {m}", at("group"))));
                     continue;
                 }
             };
             let finite = l.force.is_none_or(|f| f.iter().all(|c| c.is_finite()))
                 && l.pressure.is_none_or(f64::is_finite);
             if !finite {
+                let key = if l.pressure.is_some() {
+                    "pressure"
+                } else {
+                    "force"
+                };
                 problems.push(invalid(format!(
-                    "load '{}': non-finite force or pressure",
+                    "{}load '{}': non-finite force or pressure",
+                    at(key),
                     l.group
                 )));
                 continue;
@@ -731,7 +791,8 @@ impl Analysis {
             let mut follower = None;
             if l.follower && l.pressure.is_none() {
                 problems.push(invalid(format!(
-                    "load '{}': `follower` applies to a pressure only",
+                    "{}load '{}': `follower` applies to a pressure only",
+                    at("follower"),
                     l.group
                 )));
             }
@@ -750,7 +811,8 @@ impl Analysis {
                         .collect();
                     if faces.is_empty() && nodes.is_empty() && nodes_known {
                         problems.push(invalid(format!(
-                            "load '{}': the group has no node of any body",
+                            "{}load '{}': the group has no node of any body",
+                            at("group"),
                             l.group
                         )));
                     }
@@ -759,21 +821,26 @@ impl Analysis {
                 (None, Some(p)) => {
                     if g.dim != 2 {
                         problems.push(invalid(format!(
-                            "load '{}': pressure needs a surface (2D) group, '{}' has dimension {}",
-                            l.group, g.name, g.dim
+                            "{}load '{}': pressure needs a surface (2D) group, '{}' has dimension {}",
+                            at("group"),
+                            l.group,
+                            g.name,
+                            g.dim
                         )));
                         continue;
                     }
                     if g.elements.is_empty() {
                         problems.push(invalid(format!(
-                            "load '{}': the surface group has no faces",
+                            "{}load '{}': the surface group has no faces",
+                            at("group"),
                             l.group
                         )));
                         continue;
                     }
                     if let Some((a, b)) = loads::repeated_face(&mesh, &g.elements) {
                         problems.push(invalid(format!(
-                            "load '{}': elements {a} and {b} (Gmsh tags) are the same face: its pressure would count twice",
+                            "{}load '{}': elements {a} and {b} (Gmsh tags) are the same face: its pressure would count twice",
+                            at("group"),
                             l.group
                         )));
                         continue;
@@ -789,7 +856,8 @@ impl Analysis {
                         Err(tag) => {
                             if nodes_known {
                                 problems.push(invalid(format!(
-                                    "load '{}': face {tag} is not on the surface of a body",
+                                    "{}load '{}': face {tag} is not on the surface of a body",
+                                    at("group"),
                                     l.group
                                 )));
                             }
@@ -799,7 +867,8 @@ impl Analysis {
                 }
                 _ => {
                     problems.push(invalid(format!(
-                        "load '{}': give exactly one of `force` or `pressure`",
+                        "{}load '{}': give exactly one of `force` or `pressure`",
+                        at(""),
                         l.group
                     )));
                     continue;
@@ -807,7 +876,8 @@ impl Analysis {
             };
             if forces.keys().any(|&a| !active_nodes[a]) && nodes_known {
                 problems.push(invalid(format!(
-                    "load '{}': applied to nodes of no body",
+                    "{}load '{}': applied to nodes of no body",
+                    at("group"),
                     l.group
                 )));
             }
@@ -821,12 +891,16 @@ impl Analysis {
             });
         }
         if model.output.every == 0 {
-            problems.push(invalid("output.every must be ≥ 1".into()));
+            problems.push(invalid(format!(
+                "{}output.every must be ≥ 1",
+                src.at("output", 0, "every")
+            )));
         }
         if model.output.folder.as_os_str().is_empty() {
-            problems.push(invalid(
-                "output.folder is empty (give a folder; \".\" for the model's own)".into(),
-            ));
+            problems.push(invalid(format!(
+                "{}output.folder is empty (give a folder; \".\" for the model's own)",
+                src.at("output", 0, "folder")
+            )));
         }
 
         let an = Self {

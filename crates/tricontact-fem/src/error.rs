@@ -44,8 +44,10 @@ pub enum FemError {
         group: String,
     },
     /// The model refers to a physical group that is not in the mesh.
-    #[error("unknown {kind} group '{name}' (groups in the mesh: {available})")]
+    #[error("{at}unknown {kind} group '{name}' (groups in the mesh: {available})")]
     UnknownGroup {
+        /// Where the model file names it (`"model.toml:12: "`; empty when unknown).
+        at: String,
         /// Which kind of group was expected (volume, surface, node).
         kind: &'static str,
         /// The missing name.
@@ -128,6 +130,18 @@ impl FemError {
         match self {
             Self::Invalid(list) => list.clone(),
             other => vec![other.to_string()],
+        }
+    }
+
+    /// The error with each of its model problems prefixed by `at` (a place in the model file,
+    /// [`crate::source::SourceMap::at`]); other errors unchanged.
+    #[must_use]
+    pub fn placed(self, at: &str) -> Self {
+        match self {
+            Self::Invalid(list) => {
+                Self::Invalid(list.into_iter().map(|m| format!("{at}{m}")).collect())
+            }
+            other => other,
         }
     }
 

@@ -40,6 +40,7 @@ pub mod report;
 pub mod results;
 pub mod rigid;
 pub mod shape;
+pub mod source;
 pub mod structured;
 pub mod tet10;
 pub mod tet4;

@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use crate::error::{FemError, Result};
+use crate::source::SourceMap;
 use crate::vtu::VtuFormat;
 
 /// A whole model file.
@@ -44,6 +45,10 @@ pub struct Model {
     /// Folder of the model file (set by [`Model::load`]).
     #[serde(skip)]
     pub base_dir: PathBuf,
+    /// Lines of the model file's tables and keys, for messages (set by [`Model::parse`]; empty
+    /// for a model built in code).
+    #[serde(skip)]
+    pub source: SourceMap,
 }
 
 /// `[mesh]`.
@@ -432,7 +437,7 @@ impl Model {
     /// # Errors
     /// A syntax/schema error with line and column.
     pub fn parse(text: &str, path: &Path) -> Result<Self> {
-        let model: Self = toml::from_str(text).map_err(|e| {
+        let mut model: Self = toml::from_str(text).map_err(|e| {
             let mut message = e.message().trim().replace('\n', " ");
             // The parser's "duplicate key" does not say which: its span covers the key.
             if message == "duplicate key"
@@ -461,6 +466,7 @@ impl Model {
                         .into(),
             });
         }
+        model.source = SourceMap::new(text, path);
         Ok(model)
     }
 

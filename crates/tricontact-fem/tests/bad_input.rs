@@ -602,3 +602,49 @@ fn a_mesh_built_in_code_is_checked_like_a_read_one() {
         assert!(msg.contains(&expected), "{msg}");
     }
 }
+
+/// A problem found after parsing (a value out of range, a name that matches nothing) starts with
+/// the model file and the line of the key at fault, as a compiler's message does.
+#[test]
+fn problems_found_after_parsing_name_the_line_of_their_key() {
+    let extra = "[[boundary]]\ngroup = \"base\"\nfix = [\"x\"]\nsteps = [\"nope\"]\n";
+    let text = model_text("solidd", extra)
+        .replace("nu = 0.3", "nu = 0.7")
+        .replace("[[step]]\n", "[[step]]\nname = \"s\"\nincrements = 0\n");
+    let p = setup("lines", &msh(4, &TET), &text);
+    let line_of = |key: &str| {
+        1 + text
+            .lines()
+            .position(|l| l.starts_with(key))
+            .expect("key in the text")
+    };
+    let e = load_analysis(&p).expect_err("several problems");
+    let messages = e.messages();
+    let expect = [
+        (line_of("nu ="), "material 'm': need"),
+        (
+            line_of("group = \"solidd\""),
+            "unknown volume group 'solidd'",
+        ),
+        (line_of("steps ="), "boundary 'base': unknown step 'nope'"),
+        (line_of("increments ="), "step 's': increments must be"),
+    ];
+    for (line, what) in expect {
+        let start = format!("{}:{line}: {what}", p.display());
+        assert!(
+            messages.iter().any(|m| m.starts_with(&start)),
+            "{start} in {messages:#?}"
+        );
+    }
+    // A modulus out of range points at the modulus, by whichever name it is given.
+    for (from, to) in [
+        ("E = 1.0", "E = -1.0"),
+        ("E = 1.0", "youngs_modulus = -1.0"),
+    ] {
+        let text = model_text("solid", "").replace(from, to);
+        let p = setup("lines-modulus", &msh(4, &TET), &text);
+        let msg = load_analysis(&p).expect_err("bad modulus").to_string();
+        let start = format!("invalid model: {}:6: material 'm'", p.display());
+        assert!(msg.starts_with(&start), "{msg}");
+    }
+}

@@ -267,6 +267,9 @@ pub struct Bodies<'a> {
 /// Resolves one `[[contact]]` table; moves adjusted slave nodes in `mesh`; marks rigid master nodes
 /// in `rigid` (nodes of no body that must be fully prescribed).
 ///
+/// `at(key)` is the prefix of a message about one of the table's keys (its place in the model
+/// file, `""` when unknown): see [`crate::source::SourceMap::at`].
+///
 /// # Errors
 /// Every problem found, as messages.
 pub fn resolve(
@@ -275,47 +278,58 @@ pub fn resolve(
     bodies: &Bodies<'_>,
     in_body: &[bool],
     rigid: &mut [bool],
+    at: &dyn Fn(&str) -> String,
 ) -> Result<ContactPair, Vec<String>> {
     let name = format!("{}-{}", def.slave, def.master);
     let mut problems = Vec::new();
     if def.two_pass && def.method == ContactMethod::Multiplier {
         problems.push(format!(
-            "contact '{name}': two_pass with method = \"multiplier\" gives redundant constraints (each node pair constrained twice, a singular saddle-point system); use single pass or the penalty or augmented method"
+            "{}contact '{name}': two_pass with method = \"multiplier\" gives redundant constraints (each node pair constrained twice, a singular saddle-point system); use single pass or the penalty or augmented method", at("two_pass")
         ));
     }
     if let Some(a) = def.penalty
         && !(a > 0.0 && a.is_finite())
     {
-        problems.push(format!("contact '{name}': penalty must be > 0 (got {a})"));
+        problems.push(format!(
+            "{}contact '{name}': penalty must be > 0 (got {a})",
+            at("penalty")
+        ));
     }
     if !(def.tolerance > 0.0 && def.tolerance.is_finite()) {
         problems.push(format!(
-            "contact '{name}': tolerance must be > 0 (got {})",
+            "{}contact '{name}': tolerance must be > 0 (got {})",
+            at("tolerance"),
             def.tolerance
         ));
     }
     if let Some(d) = def.adjust
         && !(d >= 0.0 && d.is_finite())
     {
-        problems.push(format!("contact '{name}': adjust must be ≥ 0 (got {d})"));
+        problems.push(format!(
+            "{}contact '{name}': adjust must be ≥ 0 (got {d})",
+            at("adjust")
+        ));
     }
     let node_elems = node_to_elements(mesh.nodes.len(), &bodies.elements);
     let master = match mesh.lookup(&def.master, Some(2)) {
         Err(m) => {
-            problems.push(format!("contact '{name}': master: {m}"));
+            problems.push(format!("{}contact '{name}': master: {m}", at("master")));
             None
         }
         Ok(Some(g)) if g.dim == 2 => Some(g.clone()),
         Ok(Some(g)) => {
             problems.push(format!(
-                "contact '{name}': master '{}' has dimension {}, a surface (2D) group is needed",
-                g.name, g.dim
+                "{}contact '{name}': master '{}' has dimension {}, a surface (2D) group is needed",
+                at("master"),
+                g.name,
+                g.dim
             ));
             None
         }
         Ok(None) => {
             problems.push(format!(
-                "contact '{name}': unknown master surface group '{}' (groups: {})",
+                "{}contact '{name}': unknown master surface group '{}' (groups: {})",
+                at("master"),
                 def.master,
                 mesh.group_list()
             ));
@@ -326,14 +340,15 @@ pub fn resolve(
         Ok(Some(g)) => Some(g.clone()),
         Ok(None) => {
             problems.push(format!(
-                "contact '{name}': unknown slave group '{}' (groups: {})",
+                "{}contact '{name}': unknown slave group '{}' (groups: {})",
+                at("slave"),
                 def.slave,
                 mesh.group_list()
             ));
             None
         }
         Err(m) => {
-            problems.push(format!("contact '{name}': slave: {m}"));
+            problems.push(format!("{}contact '{name}': slave: {m}", at("slave")));
             None
         }
     };
@@ -349,12 +364,15 @@ pub fn resolve(
     ) {
         Ok(v) => v,
         Err(m) => {
-            problems.push(m);
+            problems.push(format!("{}{m}", at("master")));
             return Err(problems);
         }
     };
     if m_facets.is_empty() {
-        problems.push(format!("contact '{name}': master surface has no faces"));
+        problems.push(format!(
+            "{}contact '{name}': master surface has no faces",
+            at("master")
+        ));
         return Err(problems);
     }
     let slave_faces: Vec<usize> = if slave.dim == 2 {
@@ -371,13 +389,14 @@ pub fn resolve(
     ) {
         Ok(v) => v,
         Err(m) => {
-            problems.push(m);
+            problems.push(format!("{}{m}", at("slave")));
             return Err(problems);
         }
     };
     if def.two_pass && s_facets.is_empty() {
         problems.push(format!(
-            "contact '{name}': two_pass needs a surface (2D) slave group"
+            "{}contact '{name}': two_pass needs a surface (2D) slave group",
+            at("slave")
         ));
     }
     let slaves: Vec<usize> = slave
@@ -388,7 +407,8 @@ pub fn resolve(
         .collect();
     if slaves.is_empty() {
         problems.push(format!(
-            "contact '{name}': the slave group has no node of any body"
+            "{}contact '{name}': the slave group has no node of any body",
+            at("slave")
         ));
     }
     // Rigid master nodes.
@@ -421,19 +441,25 @@ pub fn resolve(
     let modulus_valid = e > 0.0 && e.is_finite();
     if def.penalty.is_none() && modulus_valid && !(penalty > 0.0 && penalty.is_finite()) {
         problems.push(format!(
-            "contact '{name}': the default penalty 10 E h is {penalty:e} (E = {e:e}, h = {h_mean:e}); give `penalty`"
+            "{}contact '{name}': the default penalty 10 E h is {penalty:e} (E = {e:e}, h = {h_mean:e}); give `penalty`", at("penalty")
         ));
     }
     if !problems.is_empty() {
         return Err(problems);
     }
-    let surface = Surface::new(m_facets, mesh.nodes.len())
-        .map_err(|e| vec![surface_error(&name, &e, &m_tags, mesh)])?;
+    let surface = Surface::new(m_facets, mesh.nodes.len()).map_err(|e| {
+        vec![format!(
+            "{}{}",
+            at("master"),
+            surface_error(&name, &e, &m_tags, mesh)
+        )]
+    })?;
     let mut report = Vec::new();
     // Initial penetrations and adjust.
     {
         let x = positions(mesh);
-        let bvh = Bvh::build(&surface, &x, h_max).map_err(|e| vec![e.to_string()])?;
+        let bvh =
+            Bvh::build(&surface, &x, h_max).map_err(|e| vec![format!("{}{e}", at("master"))])?;
         let adjust = def.adjust.unwrap_or(0.0);
         let (mut moved, mut deep, mut largest, mut worst) = (0usize, 0usize, 0.0f64, 0usize);
         let mut moves = Vec::new();
@@ -475,7 +501,8 @@ pub fn resolve(
         }
         if rigid_master && away > facing {
             return Err(vec![format!(
-                "contact '{name}': the normals of the rigid master '{}' point into the slave surface at {away} of the {} slave nodes facing it; a face of no body element keeps the mesh's node order, and its normal (x_j − x_i) × (x_k − x_i) must point towards the slave: reverse the order of its nodes",
+                "{}contact '{name}': the normals of the rigid master '{}' point into the slave surface at {away} of the {} slave nodes facing it; a face of no body element keeps the mesh's node order, and its normal (x_j − x_i) × (x_k − x_i) must point towards the slave: reverse the order of its nodes",
+                at("master"),
                 def.master,
                 away + facing
             )]);
