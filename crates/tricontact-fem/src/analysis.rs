@@ -104,6 +104,8 @@ pub struct Analysis {
     pub output: OutputDef,
     /// Resolved output folder.
     pub output_dir: PathBuf,
+    /// Notes on the model as written (a material no body uses), for [`Analysis::notes`].
+    model_notes: Vec<String>,
 }
 
 /// Most increments (and Newton iterations) a step may ask for.
@@ -141,7 +143,8 @@ impl Analysis {
             .map_or(&[], |(_, r)| r.as_slice())
     }
 
-    /// Remarks on the model that are not errors, one per step and cause: a `line_search` that
+    /// Remarks on the model that are not errors: a material no body uses, and, one per step and
+    /// cause, a `line_search` that
     /// cannot apply (the residual is not an energy gradient: Lagrange multipliers, follower
     /// pressures), and a body part whose rigid motion neither its boundaries nor the normals of
     /// its contacts hold (frictionless contact holds a slave node, and the facet it faces, only
@@ -149,7 +152,8 @@ impl Analysis {
     /// a master facet). Without contact pairs such a body is an error, not a note.
     #[must_use]
     pub fn notes(&self) -> Vec<String> {
-        let mut notes = self.line_search_notes();
+        let mut notes = self.model_notes.clone();
+        notes.extend(self.line_search_notes());
         if self.contacts.is_empty() {
             return notes;
         }
@@ -903,7 +907,22 @@ impl Analysis {
             )));
         }
 
+        // A material no body uses is most likely a body given the wrong one.
+        let model_notes = model
+            .materials
+            .iter()
+            .enumerate()
+            .filter(|(_, m)| !model.bodies.iter().any(|b| b.material == m.name))
+            .map(|(i, m)| {
+                format!(
+                    "{}material '{}' is used by no body",
+                    src.at("material", i, "name"),
+                    m.name
+                )
+            })
+            .collect();
         let an = Self {
+            model_notes,
             mesh,
             materials,
             body,

@@ -648,3 +648,28 @@ fn problems_found_after_parsing_name_the_line_of_their_key() {
         assert!(msg.starts_with(&start), "{msg}");
     }
 }
+
+/// A material that no body uses is not an error, but it is noted, with its line: most often a
+/// body was given the wrong one.
+#[test]
+fn an_unused_material_is_noted_with_its_line() {
+    let text = model_text("solid", "").replace(
+        "[[body]]",
+        "[[material]]\nname = \"spare\"\ntype = \"neo_hooke\"\nE = 2.0\nnu = 0.3\n[[body]]",
+    );
+    let p = setup("unused-material", &msh(4, &TET), &text);
+    let model = Model::load(&p).expect("model");
+    let mesh = gmsh::read_msh(&model.mesh_path()).expect("mesh");
+    let an = Analysis::new(&model, mesh).expect("a valid model");
+    let line = 1 + text
+        .lines()
+        .position(|l| l == "name = \"spare\"")
+        .expect("spare");
+    assert_eq!(
+        an.notes(),
+        [format!(
+            "{}:{line}: material 'spare' is used by no body",
+            p.display()
+        )]
+    );
+}
