@@ -157,9 +157,17 @@ pub struct DofMap {
 
 impl DofMap {
     /// Numbers free DOFs of active nodes, then the extra unknowns.
+    ///
+    /// # Panics
+    /// If `prescribed` does not hold one flag per nodal DOF (`3 × active_nodes.len()`).
     #[must_use]
     pub fn new(active_nodes: &[bool], prescribed: &[bool], n_extra: usize) -> Self {
         let n_nodal = 3 * active_nodes.len();
+        assert_eq!(
+            prescribed.len(),
+            n_nodal,
+            "DofMap::new: one prescribed flag per nodal DOF (3 per node)"
+        );
         let mut eq = vec![NO_EQ; n_nodal + n_extra];
         let mut n = 0;
         for (dof, e) in eq.iter_mut().enumerate() {

@@ -175,7 +175,8 @@ pub fn load_factor_text(t: f64, dt: f64, min_decimals: usize) -> String {
     } else {
         0
     };
-    format!("{t:.*}", needed.clamp(min_decimals, 17))
+    // Past 17 decimals an f64 has no more digits to show.
+    format!("{t:.*}", needed.clamp(min_decimals.min(17), 17))
 }
 
 #[cfg(test)]
@@ -193,5 +194,10 @@ mod tests {
         // dt ≈ 9.5e-7: its leading digit is the 7th decimal, one more is shown.
         assert_eq!(load_factor_text(b, dt, 4).len(), "0.".len() + 8);
         assert_eq!(load_factor_text(1.0, f64::NAN, 4), "1.0000");
+        // More decimals than an f64 has: 17 (`clamp` panicked when asked for more than 17).
+        assert_eq!(
+            load_factor_text(0.5, 0.25, usize::MAX),
+            format!("{:.17}", 0.5)
+        );
     }
 }

@@ -131,6 +131,23 @@ pub struct LinearSolver {
     pub cached: Option<Factor>,
     /// `LDLᵀ` was rejected once: go straight to LU from then on (kept by [`Self::reset`]).
     ldlt_rejected: bool,
+    /// The key ([`pattern_key`]) of the pattern the symbolic analyses were made for.
+    pattern: Option<PatternKey>,
+}
+
+/// Size, entry count and a hash of a sparsity pattern's column pointers and row indices.
+type PatternKey = (usize, usize, usize, u64);
+
+/// The key of `a`'s pattern: equal patterns give equal keys, and a changed one (another mesh,
+/// contact constraints added) differs but for a 64-bit hash collision. It costs one pass over
+/// the indices, small beside a factorization.
+fn pattern_key(a: SparseColMatRef<'_, usize, f64>) -> PatternKey {
+    let sym = a.symbolic();
+    let mut hash = 0xcbf2_9ce4_8422_2325_u64;
+    for &i in sym.col_ptr().iter().chain(sym.row_idx()) {
+        hash = (hash ^ i as u64).wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    (a.nrows(), a.ncols(), sym.row_idx().len(), hash)
 }
 
 impl LinearSolver {
@@ -156,11 +173,23 @@ impl LinearSolver {
         self
     }
 
-    /// Forgets the symbolic analyses (call when the pattern changes).
+    /// Forgets the symbolic analyses and the cached factorization. A matrix of another pattern
+    /// is analysed afresh without it; call it to drop a factorization kept in
+    /// [`Self::cached`].
     pub fn reset(&mut self) {
         self.llt = None;
         self.lu = None;
         self.cached = None;
+        self.pattern = None;
+    }
+
+    /// Resets the solver if `a`'s pattern is not the one it analysed.
+    fn adopt(&mut self, a: SparseColMatRef<'_, usize, f64>) {
+        let key = pattern_key(a);
+        if self.pattern != Some(key) {
+            self.reset();
+            self.pattern = Some(key);
+        }
     }
 
     /// Symbolic Cholesky analysis only (for timing).
@@ -168,6 +197,7 @@ impl LinearSolver {
     /// # Errors
     /// Allocation failure.
     pub fn analyze(&mut self, a: SparseColMatRef<'_, usize, f64>) -> Result<(), Singular> {
+        self.adopt(a);
         if self.llt.is_none() {
             let ord = match &self.order {
                 Some((fwd, inv)) if fwd.len() == a.nrows() => {
@@ -194,6 +224,7 @@ impl LinearSolver {
         a: SparseColMatRef<'_, usize, f64>,
         structure: Structure,
     ) -> Result<Factor, Singular> {
+        self.adopt(a);
         if structure != Structure::Unsymmetric {
             self.analyze(a)?;
             let symbolic = self.llt.clone().expect("analysed");
@@ -322,6 +353,25 @@ mod tests {
                 ax[i],
                 b[i]
             );
+        }
+    }
+
+    /// A solver given a matrix of another pattern analyses it afresh (it kept the first
+    /// pattern's symbolic factorization, and panicked or solved wrongly, unless reset).
+    #[test]
+    fn a_new_pattern_is_analysed_afresh() {
+        for structure in [
+            Structure::SymmetricDefinite,
+            Structure::SymmetricIndefinite,
+            Structure::Unsymmetric,
+        ] {
+            let mut solver = LinearSolver::new();
+            for n in [20, 7, 20, 31] {
+                let a = laplacian(n, 0.5);
+                let b: Vec<f64> = (0..n).map(|i| (i as f64).cos()).collect();
+                let f = solver.factor(a.as_ref(), structure).expect("factors");
+                assert_solves(&a, &f, &b, &format!("{structure:?} n = {n}"));
+            }
         }
     }
 

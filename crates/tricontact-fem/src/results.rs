@@ -35,8 +35,17 @@ fn voigt(s: &Matrix3<f64>) -> [f64; 6] {
 
 /// Computes stresses for displacements `u` (global DOFs). Inverted points
 /// (impossible at a converged state) give NaN.
+///
+/// # Panics
+/// If `u` holds fewer than three values per node of the mesh.
 #[must_use]
 pub fn stress_fields(an: &Analysis, u: &[f64], nlgeom: bool) -> StressFields {
+    assert!(
+        u.len() >= an.num_nodal_dofs(),
+        "stress_fields: u holds {} values, the mesh's nodes need {}",
+        u.len(),
+        an.num_nodal_dofs()
+    );
     let per_elem: Vec<Matrix3<f64>> = an
         .body
         .par_iter()
@@ -89,8 +98,17 @@ pub fn stress_fields(an: &Analysis, u: &[f64], nlgeom: bool) -> StressFields {
 /// Sum of the reaction forces over the nodes of each boundary group, in step `step`: only the
 /// components the boundary prescribes in that step (0 for the others, and for a boundary that is
 /// not active in it, whose nodes another boundary may hold).
+///
+/// # Panics
+/// If `reactions` holds fewer than three values per node of the mesh.
 #[must_use]
 pub fn boundary_reactions(an: &Analysis, step: usize, reactions: &[f64]) -> Vec<[f64; 3]> {
+    assert!(
+        reactions.len() >= an.num_nodal_dofs(),
+        "boundary_reactions: {} reactions, the mesh's nodes need {}",
+        reactions.len(),
+        an.num_nodal_dofs()
+    );
     an.boundaries
         .iter()
         .map(|b| {

@@ -24,6 +24,9 @@ fn find(parent: &mut [usize], mut a: usize) -> usize {
 ///
 /// # Errors
 /// A description of the under-supported component.
+///
+/// # Panics
+/// If `prescribed` does not hold one flag per nodal DOF of the mesh (3 per node).
 pub fn check_supports(an: &Analysis, prescribed: &[bool]) -> Result<(), String> {
     check_supports_with(an, prescribed, &[])
 }
@@ -33,6 +36,9 @@ pub fn check_supports(an: &Analysis, prescribed: &[bool]) -> Result<(), String> 
 ///
 /// # Errors
 /// A description of the under-supported component.
+///
+/// # Panics
+/// As [`check_supports`]; and if a `held` node is not a node of the mesh.
 pub fn check_supports_with(
     an: &Analysis,
     prescribed: &[bool],
@@ -44,6 +50,11 @@ pub fn check_supports_with(
         directions.entry(a).or_default().push(d);
     }
     let n = an.mesh.nodes.len();
+    assert_eq!(
+        prescribed.len(),
+        3 * n,
+        "check_supports: one prescribed flag per nodal DOF (3 per node)"
+    );
     let mut parent: Vec<usize> = (0..n).collect();
     for be in &an.body {
         let nodes = &an.mesh.elements[be.element].nodes;

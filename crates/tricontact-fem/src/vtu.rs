@@ -32,8 +32,17 @@ use serde::Deserialize;
 use crate::mesh::ElementKind;
 
 /// VTK cell type and node order of a volume kind.
+///
+/// # Panics
+/// If `nodes` does not hold the kind's number of nodes.
 #[must_use]
 pub fn vtk_cell(kind: ElementKind, nodes: &[usize]) -> (u8, Vec<usize>) {
+    assert_eq!(
+        nodes.len(),
+        kind.num_nodes(),
+        "vtk_cell: a {kind:?} has {} nodes",
+        kind.num_nodes()
+    );
     match kind {
         ElementKind::Tet4 => (10, nodes.to_vec()),
         ElementKind::Hex8 => (12, nodes.to_vec()),
