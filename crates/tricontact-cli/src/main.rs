@@ -157,6 +157,26 @@ fn describe(e: &FemError) -> String {
     }
 }
 
+/// The analysis of a model on its mesh, the setup of its `[hertz]` table, and every problem
+/// found in either (`run` and `check` report the same ones).
+fn resolve(
+    model: &Model,
+    mesh: tricontact_fem::mesh::Mesh,
+) -> (Analysis, Option<HertzSetup>, Vec<FemError>) {
+    let (an, mut problems) = Analysis::build(model, mesh);
+    let mut hertz = None;
+    // A [hertz] table names a pair: only meaningful once every pair resolved.
+    if let Some(h) = &model.hertz
+        && an.contacts.len() == model.contacts.len()
+    {
+        match HertzSetup::resolve_at(h, &an, &|key| model.source.at("hertz", 0, key)) {
+            Ok(setup) => hertz = Some(setup),
+            Err(e) => problems.push(e),
+        }
+    }
+    (an, hertz, problems)
+}
+
 fn set_threads(threads: Option<usize>) -> Result<(), String> {
     let Some(n) = threads else { return Ok(()) };
     if n == 0 {
@@ -209,17 +229,14 @@ fn run(
 ) -> Result<(), FemError> {
     let model = Model::load_with_mesh(model_path, mesh_override.as_deref())?;
     let mesh = gmsh::read_msh(&model.mesh_path())?;
-    let an = Analysis::new(&model, mesh)?;
+    mesh.check()?;
+    let (an, hertz, problems) = resolve(&model, mesh);
+    if let Some(e) = FemError::combine(problems) {
+        return Err(e);
+    }
     for note in an.notes() {
         say!("note: {note}");
     }
-    let hertz = model
-        .hertz
-        .as_ref()
-        .map(|h| {
-            HertzSetup::resolve(h, &an).map_err(|e| e.placed(&model.source.at("hertz", 0, "")))
-        })
-        .transpose()?;
     let mut record = RunRecord::new(hertz);
     let dir = output.unwrap_or_else(|| model.output_dir());
     let stem = model_path
@@ -412,7 +429,7 @@ fn check(model_path: &Path, mesh_override: Option<PathBuf>) -> Result<(), FemErr
             g.nodes.len()
         );
     }
-    let (an, mut problems) = Analysis::build(&model, mesh);
+    let (an, _, mut problems) = resolve(&model, mesh);
     let active = an.active_nodes.iter().filter(|&&a| a).count();
     say!(
         "bodies: {} elements, {} active nodes, {} DOFs",
@@ -420,13 +437,6 @@ fn check(model_path: &Path, mesh_override: Option<PathBuf>) -> Result<(), FemErr
         active,
         3 * active
     );
-    // A [hertz] table names a pair: only meaningful once every pair resolved.
-    if let Some(h) = &model.hertz
-        && an.contacts.len() == model.contacts.len()
-        && let Err(e) = HertzSetup::resolve(h, &an)
-    {
-        problems.push(e.placed(&model.source.at("hertz", 0, "")));
-    }
     for pair in &an.contacts {
         let facets: usize = pair.passes.iter().map(|p| p.surface.len()).sum();
         say!(

@@ -299,47 +299,80 @@ fn hertz_table_errors_name_the_key() {
         "file = \"hertz-fine.msh\"",
         &format!("file = {:?}", mesh.to_str().expect("utf8")),
     );
-    for (from, to, expect) in [
+    // Each case: the change, the message, and the line it must point at (the first line that
+    // starts with the given text; `None`: a syntax error, which gives its own line and column).
+    for (from, to, expect, key) in [
         (
             "loaded = \"top\"",
             "loaded = \"lid\"",
             "[hertz] loaded: unknown group 'lid'",
+            Some("loaded ="),
         ),
         (
             "radius = 20.0",
             "radius = -20.0",
-            "[hertz] needs radius > 0",
+            "[hertz] radius must be finite and > 0 (got -20)",
+            Some("radius ="),
         ),
         (
             "radius = 20.0",
             "radius = 20.0\nradious = 1.0",
             "unknown field `radious`",
+            None,
         ),
         (
             "radius = 20.0",
             "radius = 20.0\ncentre = [nan, 0.0, 0.0]",
             "[hertz] centre must be three finite numbers",
+            Some("centre ="),
         ),
         (
             // A rejected pair is reported alone, not again as a [hertz] without its pair.
             "method = \"multiplier\"",
             "method = \"multiplier\"\ntolerance = 0.0",
-            "tolerance must be > 0",
+            "contact 'contact-flat': tolerance must be > 0",
+            Some("tolerance ="),
         ),
         (
             "symmetry = 4 ",
             "contact = \"a-b\"\nsymmetry = 4 ",
             "[hertz] contact: no pair 'a-b' (pairs: contact-flat)",
+            Some("contact ="),
         ),
         (
             "[[step]]",
             "[[contact]]\nslave = \"top\"\nmaster = \"flat\"\nmethod = \"penalty\"\n\n[[step]]",
             "[hertz] contact: name the pair, the model has 2",
+            Some("[hertz]"),
+        ),
+        (
+            // Every problem of the table at once, each at its key.
+            "symmetry = 4 ",
+            "centre = [1e300, 0.0, 0.0]\nsymmetry = 0 ",
+            "[hertz] symmetry must be ≥ 1 (got 0)",
+            Some("symmetry = 0"),
+        ),
+        (
+            "symmetry = 4 ",
+            "centre = [1e300, 0.0, 0.0]\nsymmetry = 0 ",
+            "[hertz] centre [1e300, 0.0, 0.0] is more than",
+            Some("centre ="),
         ),
     ] {
         assert!(base.contains(from), "{from}");
         let model = out.join("bad.toml");
-        std::fs::write(&model, base.replace(from, to)).expect("write");
+        let text = base.replacen(from, to, 1);
+        std::fs::write(&model, &text).expect("write");
+        let expect = match key {
+            Some(key) => {
+                let line = 1 + text
+                    .lines()
+                    .position(|l| l.starts_with(key))
+                    .expect("key in the model");
+                format!("{}:{line}: {expect}", model.display())
+            }
+            None => expect.to_string(),
+        };
         for cmd in ["check", "run"] {
             let o = bin()
                 .args([cmd.as_ref(), model.as_os_str()])
@@ -351,13 +384,36 @@ fn hertz_table_errors_name_the_key() {
                 String::from_utf8_lossy(&o.stderr)
             );
             assert!(
-                !o.status.success() && text.contains(expect),
-                "{cmd}: {text}"
+                !o.status.success() && text.contains(&expect),
+                "{cmd}: {expect} in {text}"
             );
             assert!(!text.contains("needs a [[contact]] pair"), "{cmd}: {text}");
             let last = String::from_utf8_lossy(&o.stderr);
             assert!(last.matches("invalid model").count() <= 1, "{cmd}: {last}");
         }
+    }
+    // `run` reports a [hertz] problem beside the model's others, as `check` does (it stopped at
+    // the others).
+    let model = out.join("both.toml");
+    let text = base
+        .replacen("loaded = \"top\"", "loaded = \"lid\"", 1)
+        .replacen("increments = ", "increments = 0 # ", 1);
+    std::fs::write(&model, &text).expect("write");
+    for cmd in ["check", "run"] {
+        let o = bin()
+            .args([cmd.as_ref(), model.as_os_str()])
+            .output()
+            .expect("runs");
+        let text = format!(
+            "{}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(
+            text.contains("[hertz] loaded: unknown group 'lid'")
+                && text.contains("increments must be from 1"),
+            "{cmd}: {text}"
+        );
     }
     // Without any contact pair, `check` says the [hertz] table needs one (`run` stops earlier,
     // at the rigid flat that no pair holds any more).

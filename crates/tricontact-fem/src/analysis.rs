@@ -616,6 +616,9 @@ impl Analysis {
 
         // Boundaries.
         let mut boundaries = Vec::new();
+        // The index in the model of each resolved boundary (one with an unknown group is left
+        // out of `boundaries`).
+        let mut boundary_defs = Vec::new();
         for (bi, b) in model.boundaries.iter().enumerate() {
             let at = |key: &str| src.at("boundary", bi, key);
             let active = step_mask(
@@ -688,6 +691,7 @@ impl Analysis {
                     b.group
                 )));
             }
+            boundary_defs.push(bi);
             boundaries.push(Boundary {
                 name: b.group.clone(),
                 nodes,
@@ -719,32 +723,48 @@ impl Analysis {
                 }
             }
             for ((a, b), (count, node)) in clashes {
+                let (da, db) = (boundary_defs[a], boundary_defs[b]);
                 problems.push(invalid(format!(
-                    "step '{}': boundaries {} ('{}') and {} ('{}') prescribe different values on {count} node component(s), the first at node {node}",
+                    "{}step '{}': boundaries {} ('{}') and {} ('{}') prescribe different values on {count} node component(s), the first at node {node}",
+                    src.at("boundary", db, ""),
                     steps[s].name,
-                    a + 1,
+                    da + 1,
                     boundaries[a].name,
-                    b + 1,
+                    db + 1,
                     boundaries[b].name
                 )));
             }
         }
 
-        // Rigid master nodes (no volume element) must be fully prescribed in every step.
+        // Rigid master nodes (no volume element) must be fully prescribed in every step: each
+        // of x, y and z by some boundary (a bit per component, so that two boundaries holding
+        // the same component do not count as two).
         for s in 0..steps.len() {
             let mut held = vec![0u8; mesh.nodes.len()];
             for b in boundaries.iter().filter(|b| b.active[s]) {
                 for &a in &b.nodes {
-                    for v in b.values.iter().flatten() {
-                        let _ = v;
-                        held[a] += 1;
+                    for (i, v) in b.values.iter().enumerate() {
+                        if v.is_some() {
+                            held[a] |= 1 << i;
+                        }
                     }
                 }
             }
-            if let Some(a) = (0..mesh.nodes.len()).find(|&a| rigid[a] && held[a] < 3) {
+            if let Some(a) = (0..mesh.nodes.len()).find(|&a| rigid[a] && held[a] != 0b111) {
+                // The message points at the first pair whose master holds the node.
+                let pair = model.contacts.iter().position(|c| {
+                    matches!(mesh.lookup(&c.master, Some(2)), Ok(Some(g)) if g.nodes.contains(&a))
+                });
+                let free: Vec<&str> = (0..3)
+                    .filter(|i| held[a] & (1 << i) == 0)
+                    .map(|i| ["x", "y", "z"][i])
+                    .collect();
                 problems.push(invalid(format!(
-                    "step '{}': node {} of a rigid contact surface (no volume element) must have x, y and z prescribed",
-                    steps[s].name, mesh.node_tags[a]
+                    "{}step '{}': node {} of a rigid contact surface (no volume element) must have x, y and z prescribed ({} free)",
+                    pair.map(|i| src.at("contact", i, "master")).unwrap_or_default(),
+                    steps[s].name,
+                    mesh.node_tags[a],
+                    free.join(", ")
                 )));
             }
         }
@@ -777,16 +797,19 @@ impl Analysis {
                     continue;
                 }
             };
-            let finite = l.force.is_none_or(|f| f.iter().all(|c| c.is_finite()))
-                && l.pressure.is_none_or(f64::is_finite);
-            if !finite {
-                let key = if l.pressure.is_some() {
-                    "pressure"
-                } else {
-                    "force"
-                };
+            if l.force.is_some() == l.pressure.is_some() {
                 problems.push(invalid(format!(
-                    "{}load '{}': non-finite force or pressure",
+                    "{}load '{}': give exactly one of `force` or `pressure`",
+                    at(""),
+                    l.group
+                )));
+                continue;
+            }
+            let force_finite = l.force.is_none_or(|f| f.iter().all(|c| c.is_finite()));
+            if !force_finite || !l.pressure.is_none_or(f64::is_finite) {
+                let key = if force_finite { "pressure" } else { "force" };
+                problems.push(invalid(format!(
+                    "{}load '{}': non-finite {key}",
                     at(key),
                     l.group
                 )));
@@ -869,14 +892,7 @@ impl Analysis {
                         }
                     }
                 }
-                _ => {
-                    problems.push(invalid(format!(
-                        "{}load '{}': give exactly one of `force` or `pressure`",
-                        at(""),
-                        l.group
-                    )));
-                    continue;
-                }
+                _ => unreachable!("exactly one of force and pressure, checked above"),
             };
             if forces.keys().any(|&a| !active_nodes[a]) && nodes_known {
                 problems.push(invalid(format!(

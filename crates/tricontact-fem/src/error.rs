@@ -60,7 +60,7 @@ pub enum FemError {
     Invalid(Vec<String>),
     /// An element has a non-positive Jacobian in the reference configuration.
     #[error(
-        "element {element} (Gmsh tag {tag}) is inverted: Jacobian determinant {det_j:.3e} < 0 at an integration point"
+        "element {tag} is inverted: Jacobian determinant {det_j:.3e} < 0 at an integration point"
     )]
     InvertedElement {
         /// Internal element index.
@@ -72,7 +72,7 @@ pub enum FemError {
     },
     /// An element has (numerically) zero volume.
     #[error(
-        "element {element} (Gmsh tag {tag}) has zero volume (Jacobian determinant {det_j:.3e} relative to its size)"
+        "element {tag} has zero volume (Jacobian determinant {det_j:.3e} relative to its size)"
     )]
     ZeroVolume {
         /// Internal element index.
@@ -130,18 +130,6 @@ impl FemError {
         match self {
             Self::Invalid(list) => list.clone(),
             other => vec![other.to_string()],
-        }
-    }
-
-    /// The error with each of its model problems prefixed by `at` (a place in the model file,
-    /// [`crate::source::SourceMap::at`]); other errors unchanged.
-    #[must_use]
-    pub fn placed(self, at: &str) -> Self {
-        match self {
-            Self::Invalid(list) => {
-                Self::Invalid(list.into_iter().map(|m| format!("{at}{m}")).collect())
-            }
-            other => other,
         }
     }
 

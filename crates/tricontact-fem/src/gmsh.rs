@@ -333,11 +333,18 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<Mesh> {
                             k.num_nodes()
                         )));
                     }
-                    mesh.elements.push(Element {
+                    let element = Element {
                         kind: k,
                         nodes: idx.clone(),
                         tag: el.element_tag,
-                    });
+                    };
+                    if let Some(a) = crate::mesh::repeated_node(&element) {
+                        return Err(merr(format!(
+                            "element {} ({k:?}) names node {} twice",
+                            el.element_tag, mesh.node_tags[a]
+                        )));
+                    }
+                    mesh.elements.push(element);
                     Some(mesh.elements.len() - 1)
                 }
                 _ => None,

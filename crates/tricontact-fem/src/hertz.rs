@@ -133,10 +133,6 @@ pub struct HertzSetup {
     pub slaves: Vec<usize>,
 }
 
-fn invalid(message: String) -> FemError {
-    FemError::Invalid(vec![format!("[hertz] {message}")])
-}
-
 /// How many model sizes (the diagonal of the mesh's bounding box) a `centre` may lie from the
 /// mesh, and a `radius` may reach.
 const FAR: f64 = 1e6;
@@ -145,58 +141,114 @@ impl HertzSetup {
     /// Resolves the table against the analysis.
     ///
     /// # Errors
-    /// Unknown pair or group, no unique pair, non-positive radius or modulus, zero axis,
-    /// zero symmetry.
+    /// As [`HertzSetup::resolve_at`], its messages without their place in the model file.
     pub fn resolve(def: &HertzDef, an: &Analysis) -> Result<Self> {
+        Self::resolve_at(def, an, &|_| String::new())
+    }
+
+    /// Resolves the table against the analysis; `at(key)` is the prefix of a message about one
+    /// of its keys (its place in the model file: [`crate::source::SourceMap::at`]).
+    ///
+    /// # Errors
+    /// [`FemError::Invalid`] listing every problem found: unknown pair or group, no unique pair,
+    /// non-positive radius or modulus, zero axis, zero symmetry, a centre or radius far outside
+    /// the mesh.
+    pub fn resolve_at(def: &HertzDef, an: &Analysis, at: &dyn Fn(&str) -> String) -> Result<Self> {
+        let mut problems = Vec::new();
+        let mut problem = |key: &str, message: String| {
+            problems.push(format!("{}[hertz] {message}", at(key)));
+        };
         let names: Vec<&str> = an.contacts.iter().map(|p| p.name.as_str()).collect();
         let pair = match &def.contact {
-            Some(name) => an
-                .contacts
-                .iter()
-                .find(|p| &p.name == name)
-                .ok_or_else(|| {
-                    invalid(format!(
-                        "contact: no pair '{name}' (pairs: {})",
-                        names.join(", ")
-                    ))
-                })?,
-            None if an.contacts.len() == 1 => &an.contacts[0],
+            Some(name) => {
+                let pair = an.contacts.iter().find(|p| &p.name == name);
+                if pair.is_none() {
+                    problem(
+                        "contact",
+                        format!("contact: no pair '{name}' (pairs: {})", names.join(", ")),
+                    );
+                }
+                pair
+            }
+            None if an.contacts.len() == 1 => Some(&an.contacts[0]),
             None if an.contacts.is_empty() => {
-                return Err(invalid(
+                problem(
+                    "",
                     "needs a [[contact]] pair (the sphere as slave, the flat as master)".into(),
-                ));
+                );
+                None
             }
             None => {
-                return Err(invalid(format!(
-                    "contact: name the pair, the model has {} (pairs: {})",
-                    an.contacts.len(),
-                    names.join(", ")
-                )));
+                problem(
+                    "",
+                    format!(
+                        "contact: name the pair, the model has {} (pairs: {})",
+                        an.contacts.len(),
+                        names.join(", ")
+                    ),
+                );
+                None
             }
         };
-        let group = an
-            .mesh
-            .lookup(&def.loaded, None)
-            .map_err(|m| invalid(format!("loaded: {m}")))?
-            .ok_or_else(|| invalid(format!("loaded: {}", unknown_group(an, &def.loaded))))?;
-        let modulus = match def.modulus {
-            Some(m) => m,
-            None => slave_modulus(an, pair.passes[0].slaves.first().copied())
-                .ok_or_else(|| invalid("modulus: no body element at the slave nodes".into()))?,
+        let group = match an.mesh.lookup(&def.loaded, None) {
+            Ok(Some(g)) => Some(g),
+            Ok(None) => {
+                problem(
+                    "loaded",
+                    format!("loaded: {}", unknown_group(an, &def.loaded)),
+                );
+                None
+            }
+            Err(m) => {
+                problem("loaded", format!("loaded: {m}"));
+                None
+            }
+        };
+        let modulus = match (def.modulus, pair) {
+            (Some(m), _) => Some(m),
+            (None, Some(pair)) => {
+                let m = slave_modulus(an, pair.passes[0].slaves.first().copied());
+                if m.is_none() {
+                    problem(
+                        "modulus",
+                        "modulus: no body element at the slave nodes".into(),
+                    );
+                }
+                m
+            }
+            (None, None) => None,
         };
         let norm = def.axis.iter().map(|x| x * x).sum::<f64>().sqrt();
         let positive = |x: f64| x > 0.0 && x.is_finite();
-        if !def.centre.iter().all(|c| c.is_finite()) {
-            return Err(invalid(format!(
-                "centre must be three finite numbers (got {:?})",
-                def.centre
-            )));
+        let centre_finite = def.centre.iter().all(|c| c.is_finite());
+        if !centre_finite {
+            problem(
+                "centre",
+                format!("centre must be three finite numbers (got {:?})", def.centre),
+            );
         }
-        if !positive(def.radius) || !positive(modulus) || !positive(norm) || def.symmetry == 0 {
-            return Err(invalid(format!(
-                "needs radius > 0, modulus > 0, a non-zero axis and symmetry ≥ 1 (got radius {}, modulus {modulus}, |axis| {norm}, symmetry {})",
-                def.radius, def.symmetry
-            )));
+        if !positive(def.radius) {
+            problem(
+                "radius",
+                format!("radius must be finite and > 0 (got {})", def.radius),
+            );
+        }
+        if let Some(m) = modulus
+            && !positive(m)
+        {
+            problem(
+                "modulus",
+                format!("modulus must be finite and > 0 (got {m})"),
+            );
+        }
+        if !positive(norm) {
+            problem(
+                "axis",
+                format!("axis must not be zero (got {:?})", def.axis),
+            );
+        }
+        if def.symmetry == 0 {
+            problem("symmetry", "symmetry must be ≥ 1 (got 0)".into());
         }
         // A unit slip (metres for millimetres, or worse) shows as a centre or radius far outside
         // the model; at 10³⁰⁰ the distances from the axis overflowed.
@@ -205,18 +257,29 @@ impl HertzSetup {
         let outside = (0..3)
             .map(|i| (low[i] - def.centre[i]).max(def.centre[i] - high[i]))
             .fold(0.0, f64::max);
-        if outside > FAR * size {
-            return Err(invalid(format!(
-                "centre {:?} is more than {FAR:e} model sizes ({size:e}) from the mesh: is it in the mesh's units?",
-                def.centre
-            )));
+        if centre_finite && outside > FAR * size {
+            problem(
+                "centre",
+                format!(
+                    "centre {:?} is more than {FAR:e} model sizes ({size:e}) from the mesh: is it in the mesh's units?",
+                    def.centre
+                ),
+            );
         }
-        if def.radius > FAR * size {
-            return Err(invalid(format!(
-                "radius {:e} exceeds {FAR:e} model sizes ({size:e}): is it in the mesh's units?",
-                def.radius
-            )));
+        if def.radius.is_finite() && def.radius > FAR * size {
+            problem(
+                "radius",
+                format!(
+                    "radius {:e} exceeds {FAR:e} model sizes ({size:e}): is it in the mesh's units?",
+                    def.radius
+                ),
+            );
         }
+        let (Some(pair), Some(group), Some(modulus), true) =
+            (pair, group, modulus, problems.is_empty())
+        else {
+            return Err(FemError::Invalid(problems));
+        };
         Ok(Self {
             theory: Hertz {
                 radius: def.radius,

@@ -112,6 +112,18 @@ pub struct Mesh {
     pub groups: Vec<Group>,
 }
 
+/// A node that a volume element names twice (its index), `None` for faces and for a valid
+/// element. Such an element has lost a corner: a hexahedron collapsed that way can keep positive
+/// Jacobians and splits the mesh without a word.
+#[must_use]
+pub fn repeated_node(e: &Element) -> Option<usize> {
+    if e.kind.dim() != 3 {
+        return None;
+    }
+    let nodes = &e.nodes;
+    (1..nodes.len()).find_map(|i| nodes[..i].contains(&nodes[i]).then_some(nodes[i]))
+}
+
 impl Mesh {
     /// Checks what the Gmsh reader guarantees, for a mesh built by other code: every coordinate
     /// finite and within ±[`crate::gmsh::MAX_COORDINATE`] ([`crate::gmsh::coordinate_fault`]), a
@@ -147,6 +159,12 @@ impl Mesh {
             }
             if let Some(&a) = e.nodes.iter().find(|&&a| a >= n) {
                 return invalid(format!("element {} names node index {a} of {n}", e.tag));
+            }
+            if let Some(a) = repeated_node(e) {
+                return invalid(format!(
+                    "element {} ({:?}) names node {} twice",
+                    e.tag, e.kind, self.node_tags[a]
+                ));
             }
         }
         for g in &self.groups {

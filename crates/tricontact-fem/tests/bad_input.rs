@@ -157,6 +157,53 @@ fn inverted_element_is_reported() {
     assert!(matches!(e, FemError::InvertedElement { tag: 1, .. }), "{e}");
 }
 
+/// A volume element that names a node twice (a corner lost) is refused by the reader and by
+/// [`Mesh::check`], naming the element and the node by their Gmsh tags: a hexahedron collapsed
+/// that way kept positive Jacobians and split the mesh without a word. The message of an
+/// inverted element names it by its Gmsh tag alone (it gave the internal index as well).
+#[test]
+fn an_element_naming_a_node_twice_is_refused() {
+    let hex: Vec<[f64; 3]> = (0..8)
+        .map(|i| {
+            let (x, y) = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)][i % 4];
+            [x, y, (i / 4) as f64]
+        })
+        .collect();
+    let good = msh(5, &hex);
+    let line = "\n1 1 2 3 4 5 6 7 8\n";
+    assert!(good.contains(line));
+    let bad = good.replace(line, "\n1 1 2 3 4 5 6 7 7\n");
+    let e = gmsh::parse_msh(bad.as_bytes(), Path::new("b.msh")).expect_err("repeated node");
+    assert!(
+        e.to_string()
+            .contains("element 1 (Hex8) names node 7 twice"),
+        "{e}"
+    );
+    let mut mesh = gmsh::parse_msh(good.as_bytes(), Path::new("g.msh")).expect("good");
+    mesh.check().expect("valid");
+    mesh.node_tags = (1..=8).map(|t| 10 * t).collect();
+    mesh.elements[0].nodes[7] = mesh.elements[0].nodes[0];
+    let e = mesh.check().expect_err("repeated node");
+    assert!(
+        e.to_string()
+            .contains("element 1 (Hex8) names node 10 twice"),
+        "{e}"
+    );
+    let mut nodes = TET;
+    nodes.swap(1, 2);
+    let p = setup(
+        "inverted-message",
+        &msh(4, &nodes),
+        &model_text("solid", ""),
+    );
+    let e = load_analysis(&p).expect_err("inverted");
+    assert!(
+        e.to_string()
+            .starts_with("element 1 is inverted: Jacobian determinant"),
+        "{e}"
+    );
+}
+
 #[test]
 fn zero_volume_element_is_reported() {
     let mut nodes = TET;
@@ -260,8 +307,8 @@ fn values_that_would_give_nan_or_never_end_are_rejected_by_key() {
         "material 'm': need 1e-100 < E < 1e100 and -1 < nu < 0.5 (got E = inf, nu = 1e300)",
         "material 'tiny': need 1e-100 < E < 1e100 and -1 < nu < 0.5 (got E = 1e-200",
         "body group 'solid' is listed twice",
-        "load 'base': non-finite force or pressure",
-        "load 'solid': non-finite force or pressure",
+        "load 'base': non-finite pressure",
+        "load 'solid': non-finite force",
         "contact 'base-base': slave and master are the same group",
         "contact 'solid-base' is defined twice",
         "step name 'a' is used twice",
@@ -631,6 +678,37 @@ fn problems_found_after_parsing_name_the_line_of_their_key() {
     ];
     for (line, what) in expect {
         let start = format!("{}:{line}: {what}", p.display());
+        assert!(
+            messages.iter().any(|m| m.starts_with(&start)),
+            "{start} in {messages:#?}"
+        );
+    }
+    // Two boundaries in conflict: the second one's header. A load given both a force and a
+    // pressure is told so, whatever their values.
+    let extra = "[[boundary]]\ngroup = \"solid\"\nfix = [\"x\"]\n\
+                 [[boundary]]\ngroup = \"solid\"\ndisplacement = { x = 1.0 }\n\
+                 [[load]]\ngroup = \"base\"\nforce = [0.0, nan, 0.0]\npressure = 1.0\n";
+    let text = model_text("solid", extra);
+    let p = setup("lines-clash", &msh(4, &TET), &text);
+    let messages = load_analysis(&p).expect_err("clash").messages();
+    let second = 1 + text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| *l == "[[boundary]]")
+        .nth(1)
+        .expect("two boundaries")
+        .0;
+    let load = 1 + text.lines().position(|l| l == "[[load]]").expect("load");
+    for start in [
+        format!(
+            "{}:{second}: step 'step-1': boundaries 1 ('solid') and 2 ('solid') prescribe different values",
+            p.display()
+        ),
+        format!(
+            "{}:{load}: load 'base': give exactly one of `force` or `pressure`",
+            p.display()
+        ),
+    ] {
         assert!(
             messages.iter().any(|m| m.starts_with(&start)),
             "{start} in {messages:#?}"

@@ -406,3 +406,34 @@ fn a_body_held_only_along_contact_normals_is_noted() {
         "{notes:?}"
     );
 }
+
+/// A rigid master's node must have each of x, y and z prescribed: two boundaries that hold the
+/// same component do not make up for one left free (the count of held components took them for
+/// two). The problem points at the pair's `master`.
+#[test]
+fn a_rigid_master_node_needs_each_component_held() {
+    let folder = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/hertz");
+    let path = folder.join("penalty.toml");
+    let text = std::fs::read_to_string(&path).expect("example");
+    let held = "group = \"flat\"        # rigid flat: facets without volume, every node held\nfix = [\"x\", \"y\", \"z\"]\n";
+    assert!(text.contains(held));
+    let text = text.replace(
+        held,
+        "group = \"flat\"\nfix = [\"x\", \"y\"]\n\n[[boundary]]\ngroup = \"flat\"\nfix = [\"x\"]\n",
+    );
+    let mut model = tricontact_fem::model::Model::parse(&text, &path).expect("parses");
+    model.base_dir = folder;
+    let mesh = tricontact_fem::gmsh::read_msh(&model.mesh_path()).expect("mesh");
+    let (_, problems) = tricontact_fem::analysis::Analysis::build(&model, mesh);
+    let master = 1 + text
+        .lines()
+        .position(|l| l == "master = \"flat\"")
+        .expect("master");
+    let start = format!("{}:{master}: step 'press': node ", path.display());
+    let messages: Vec<String> = problems.iter().map(ToString::to_string).collect();
+    assert!(
+        messages.iter().any(|m| m.contains(&start)
+            && m.ends_with("of a rigid contact surface (no volume element) must have x, y and z prescribed (z free)")),
+        "{start} in {messages:#?}"
+    );
+}
