@@ -143,7 +143,9 @@ pub fn total_force(
     for &fi in faces {
         let face = &mesh.elements[fi];
         for (a, n) in face_points(mesh, face) {
-            let da = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+            // Without squaring: areas of faces with edges past 10¹⁵⁴ (coordinates go to 10¹⁰⁰)
+            // overflowed in the squares, and the force came out NaN.
+            let da = a[0].hypot(a[1]).hypot(a[2]);
             area += da;
             for (k, &node) in face.nodes.iter().enumerate() {
                 *weights.entry(node).or_insert(0.0) += n[k] * da;

@@ -25,7 +25,8 @@ impl ContactTerms {
     fn pressure(&self, a: usize) -> Option<f64> {
         let own = |a: usize| {
             let f = &self.committed_force[3 * a..3 * a + 3];
-            let m = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
+            // Without squaring: forces past 10¹⁵⁴ (large models in small units) overflowed.
+            let m = f[0].hypot(f[1]).hypot(f[2]);
             (self.areas[a] > 0.0).then(|| m / self.areas[a])
         };
         if self.areas[a] > 0.0 || self.proxies[a].is_empty() {
