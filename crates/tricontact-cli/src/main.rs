@@ -177,6 +177,19 @@ fn resolve(
     (an, hertz, problems)
 }
 
+/// A problem at `[output] folder` when it names an existing file (`run` without `--output` would
+/// fail on it only after the analysis was set up).
+fn folder_problem(model: &Model) -> Option<FemError> {
+    let dir = model.output_dir();
+    (dir.exists() && !dir.is_dir()).then(|| {
+        FemError::Invalid(vec![format!(
+            "{}output.folder {}: exists and is not a folder",
+            model.source.at("output", 0, "folder"),
+            dir.display()
+        )])
+    })
+}
+
 fn set_threads(threads: Option<usize>) -> Result<(), String> {
     let Some(n) = threads else { return Ok(()) };
     if n == 0 {
@@ -230,7 +243,10 @@ fn run(
     let model = Model::load_with_mesh(model_path, mesh_override.as_deref())?;
     let mesh = gmsh::read_msh(&model.mesh_path())?;
     mesh.check()?;
-    let (an, hertz, problems) = resolve(&model, mesh);
+    let (an, hertz, mut problems) = resolve(&model, mesh);
+    if output.is_none() {
+        problems.extend(folder_problem(&model));
+    }
     if let Some(e) = FemError::combine(problems) {
         return Err(e);
     }
@@ -430,6 +446,7 @@ fn check(model_path: &Path, mesh_override: Option<PathBuf>) -> Result<(), FemErr
         );
     }
     let (an, _, mut problems) = resolve(&model, mesh);
+    problems.extend(folder_problem(&model));
     let active = an.active_nodes.iter().filter(|&&a| a).count();
     say!(
         "bodies: {} elements, {} active nodes, {} DOFs",

@@ -766,3 +766,49 @@ fn check_lists_several_problems_with_one_prefix() {
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
     assert_eq!(stderr.matches("invalid model").count(), 1, "{stderr}");
 }
+
+/// An `[output] folder` that names an existing file is a problem of the model, at its line, for
+/// `check` and for `run` (which found it only once the analysis was set up); `run --output`
+/// elsewhere does not use that folder and runs.
+#[test]
+fn an_output_folder_that_is_a_file_is_a_model_problem() {
+    let dir = temp_dir("folder-file");
+    let mesh = example().with_file_name("beam.msh");
+    let src = std::fs::read_to_string(example())
+        .expect("model")
+        .replace("\"beam.msh\"", &format!("{mesh:?}"))
+        .replace("folder = \"results\"", &format!("folder = {mesh:?}"));
+    let line = 1 + src
+        .lines()
+        .position(|l| l.starts_with("folder ="))
+        .expect("folder");
+    let model = dir.join("model.toml");
+    std::fs::write(&model, &src).expect("write");
+    let expect = format!(
+        "{}:{line}: output.folder {}: exists and is not a folder",
+        model.display(),
+        mesh.display()
+    );
+    for cmd in ["check", "run"] {
+        let o = bin()
+            .args([cmd.as_ref(), model.as_os_str()])
+            .output()
+            .expect("runs");
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && stderr.contains(&expect),
+            "{cmd}: {stderr}"
+        );
+    }
+    let o = bin()
+        .args([
+            "run".as_ref(),
+            model.as_os_str(),
+            "--output".as_ref(),
+            dir.join("out").as_os_str(),
+        ])
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::remove_dir_all(&dir).ok();
+}
