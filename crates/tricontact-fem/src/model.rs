@@ -413,6 +413,15 @@ impl Model {
     /// # Errors
     /// I/O error, or a syntax/schema error with line and column.
     pub fn load(path: &Path) -> Result<Self> {
+        // A device or a pipe (`/dev/zero`, a fifo) would be read until memory runs out, or
+        // forever.
+        let meta = std::fs::metadata(path).map_err(|e| FemError::io(path, e))?;
+        if !meta.is_file() {
+            return Err(FemError::ModelSyntax {
+                path: path.to_path_buf(),
+                message: "not a regular file (a model is a .toml file)".into(),
+            });
+        }
         let text = std::fs::read_to_string(path).map_err(|e| FemError::io(path, e))?;
         let mut model = Self::parse(&text, path)?;
         model.base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
@@ -495,10 +504,16 @@ impl Model {
 /// 1-based line and column of a byte offset.
 #[must_use]
 pub fn line_col(text: &str, offset: usize) -> (usize, usize) {
-    let before = &text[..offset.min(text.len())];
+    let before = text.get(..offset.min(text.len())).unwrap_or(text);
     let line = before.matches('\n').count() + 1;
-    let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
-    (line, col)
+    let last = before.rsplit('\n').next().unwrap_or_default();
+    // A byte-order mark, which some editors write, is not a column.
+    let last = if line == 1 {
+        last.strip_prefix('\u{feff}').unwrap_or(last)
+    } else {
+        last
+    };
+    (line, last.chars().count() + 1)
 }
 
 #[cfg(test)]
@@ -597,6 +612,14 @@ nlgeom = true
         let text = format!("{GOOD}[[load]]\ngroup = \"tip\"\nforce = [0.0, 1.0, 2.0]\n");
         let m = Model::parse(&text, Path::new("m.toml")).expect("three");
         assert_eq!(m.loads[1].force, Some([0.0, 1.0, 2.0]));
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_not_a_column() {
+        let text = "\u{feff}bogus = 1\n";
+        let e = Model::parse(text, Path::new("m.toml")).expect_err("unknown key");
+        assert!(e.to_string().contains("line 1, column 1"), "{e}");
+        assert_eq!(line_col(text, text.len()), (2, 1));
     }
 
     #[test]

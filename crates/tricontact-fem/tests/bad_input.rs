@@ -100,6 +100,25 @@ fn missing_mesh_file_names_the_path() {
     assert!(e.to_string().contains("nowhere.msh"), "{e}");
 }
 
+/// A model path that is not a regular file (a device, a folder) is refused before it is read:
+/// `/dev/zero` was read until memory ran out.
+#[test]
+fn a_model_path_that_is_not_a_file_is_refused() {
+    let d = temp_dir("model-not-file");
+    for path in [d.as_path(), Path::new("/dev/zero")] {
+        if !path.exists() {
+            continue;
+        }
+        let e = Model::load(path).expect_err("not a file");
+        assert!(
+            matches!(e, FemError::ModelSyntax { .. })
+                && e.to_string()
+                    .ends_with("not a regular file (a model is a .toml file)"),
+            "{e}"
+        );
+    }
+}
+
 #[test]
 fn unsupported_element_type_is_named() {
     let prism = [
