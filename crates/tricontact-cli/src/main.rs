@@ -56,7 +56,8 @@ enum Command {
         /// Mesh file to use instead of `[mesh] file` (relative to the current folder).
         #[arg(long)]
         mesh: Option<PathBuf>,
-        /// Print a one-line summary per increment.
+        /// Print a line per increment (iterations, relative residuals) and, with contact, one per
+        /// Newton iteration (closed nodes, status and facet changes).
         #[arg(long)]
         verbose: bool,
         /// Worker threads for assembly and factorization (default: all cores).

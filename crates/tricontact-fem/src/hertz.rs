@@ -233,7 +233,9 @@ impl HertzSetup {
                 format!("radius must be finite and > 0 (got {})", def.radius),
             );
         }
-        if let Some(m) = modulus
+        // A modulus taken from the slave body is that of a valid material, or of one reported
+        // invalid with its own key: only a given one is checked here.
+        if let Some(m) = def.modulus
             && !positive(m)
         {
             problem(
@@ -274,6 +276,14 @@ impl HertzSetup {
                     def.radius
                 ),
             );
+        }
+        // Taken from the slave body, it is not > 0 only when that body's material is invalid
+        // (a problem of its own): say so rather than quote a modulus the user never gave.
+        if def.modulus.is_none() && modulus.is_some_and(|m| !positive(m)) {
+            problems.push(format!(
+                "{}[hertz] modulus: taken from the slave body's material, which is invalid; fix the material or give `modulus`",
+                at("modulus")
+            ));
         }
         let (Some(pair), Some(group), Some(modulus), true) =
             (pair, group, modulus, problems.is_empty())

@@ -467,15 +467,20 @@ impl Model {
                 message: format!("{at}{message}"),
             }
         })?;
+        model.source = SourceMap::new(text, path);
         if model.mesh.file.as_os_str().is_empty() {
+            let at = model
+                .source
+                .line("mesh", 0, "file")
+                .map(|n| format!("line {n}: "))
+                .unwrap_or_default();
             return Err(FemError::ModelSyntax {
                 path: path.to_path_buf(),
-                message:
-                    "[mesh] file is empty (give the .msh file, relative to the model's folder)"
-                        .into(),
+                message: format!(
+                    "{at}[mesh] file is empty (give the .msh file, relative to the model's folder)"
+                ),
             });
         }
-        model.source = SourceMap::new(text, path);
         Ok(model)
     }
 

@@ -547,7 +547,8 @@ fn an_empty_mesh_file_is_named() {
     let text = model_text("solid", "").replace("file = \"m.msh\"", "file = \"\"");
     let e = Model::parse(&text, Path::new("m.toml")).expect_err("empty file");
     assert!(
-        e.to_string().contains("m.toml: [mesh] file is empty"),
+        e.to_string()
+            .contains("m.toml: line 2: [mesh] file is empty"),
         "{e}"
     );
 }

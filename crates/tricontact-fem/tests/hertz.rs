@@ -143,3 +143,24 @@ fn a_centre_or_radius_far_outside_the_model_is_refused() {
     let e = tricontact_fem::hertz::HertzSetup::resolve(&huge, &an).expect_err("huge radius");
     assert!(e.to_string().contains("radius 1e300 exceeds"), "{e}");
 }
+
+/// A modulus taken from an invalid slave material is not quoted back as if the user had given
+/// it (`modulus must be > 0 (got -1.1)`): the message says where it came from.
+#[test]
+fn a_modulus_from_an_invalid_material_says_where_it_came_from() {
+    let (m, mut an) = common::example("hertz", "penalty.toml", Some("hertz-coarse.msh"));
+    let def = m.hertz.expect("[hertz]");
+    assert!(def.modulus.is_none(), "the example takes the sphere's");
+    // Both Lamé constants negated: the Young's modulus E = μ(3λ + 2μ)/(λ + μ) changes sign.
+    for material in &mut an.materials {
+        material.mu = -material.mu;
+        material.lambda = -material.lambda;
+    }
+    let e = tricontact_fem::hertz::HertzSetup::resolve(&def, &an).expect_err("invalid material");
+    assert_eq!(
+        e.messages(),
+        [
+            "[hertz] modulus: taken from the slave body's material, which is invalid; fix the material or give `modulus`"
+        ]
+    );
+}
