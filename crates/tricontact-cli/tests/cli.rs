@@ -289,6 +289,17 @@ fn hertz_coarse_writes_tables_plots_and_summary() {
     std::fs::remove_dir_all(&out).ok();
 }
 
+/// `tricontact CMD MODEL`: whether it succeeded, its stdout and stderr together, its stderr.
+fn outcome(cmd: &str, model: &Path) -> (bool, String, String) {
+    let o = bin()
+        .args([cmd.as_ref(), model.as_os_str()])
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+    let text = format!("{}{stderr}", String::from_utf8_lossy(&o.stdout));
+    (o.status.success(), text, stderr)
+}
+
 #[test]
 fn hertz_table_errors_name_the_key() {
     let out = temp_dir("hertz-bad");
@@ -374,22 +385,13 @@ fn hertz_table_errors_name_the_key() {
             None => expect.to_string(),
         };
         for cmd in ["check", "run"] {
-            let o = bin()
-                .args([cmd.as_ref(), model.as_os_str()])
-                .output()
-                .expect("runs");
-            let text = format!(
-                "{}{}",
-                String::from_utf8_lossy(&o.stdout),
-                String::from_utf8_lossy(&o.stderr)
-            );
-            assert!(
-                !o.status.success() && text.contains(&expect),
-                "{cmd}: {expect} in {text}"
-            );
+            let (ok, text, stderr) = outcome(cmd, &model);
+            assert!(!ok && text.contains(&expect), "{cmd}: {expect} in {text}");
             assert!(!text.contains("needs a [[contact]] pair"), "{cmd}: {text}");
-            let last = String::from_utf8_lossy(&o.stderr);
-            assert!(last.matches("invalid model").count() <= 1, "{cmd}: {last}");
+            assert!(
+                stderr.matches("invalid model").count() <= 1,
+                "{cmd}: {stderr}"
+            );
         }
     }
     // `run` reports a [hertz] problem beside the model's others, as `check` does (it stopped at
@@ -400,17 +402,9 @@ fn hertz_table_errors_name_the_key() {
         .replacen("increments = ", "increments = 0 # ", 1);
     std::fs::write(&model, &text).expect("write");
     for cmd in ["check", "run"] {
-        let o = bin()
-            .args([cmd.as_ref(), model.as_os_str()])
-            .output()
-            .expect("runs");
-        let text = format!(
-            "{}{}",
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        );
+        let (ok, text, _) = outcome(cmd, &model);
         assert!(
-            text.contains("[hertz] loaded: unknown group 'lid'")
+            !ok && text.contains("[hertz] loaded: unknown group 'lid'")
                 && text.contains("increments must be from 1"),
             "{cmd}: {text}"
         );

@@ -218,7 +218,7 @@ impl HertzSetup {
             }
             (None, None) => None,
         };
-        let norm = def.axis.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let norm = def.axis[0].hypot(def.axis[1]).hypot(def.axis[2]);
         let positive = |x: f64| x > 0.0 && x.is_finite();
         let centre_finite = def.centre.iter().all(|c| c.is_finite());
         if !centre_finite {
@@ -246,7 +246,7 @@ impl HertzSetup {
         if !positive(norm) {
             problem(
                 "axis",
-                format!("axis must not be zero (got {:?})", def.axis),
+                format!("axis must be finite and not zero (got {:?})", def.axis),
             );
         }
         if def.symmetry == 0 {

@@ -198,6 +198,11 @@ impl LinearSolver {
     /// Allocation failure.
     pub fn analyze(&mut self, a: SparseColMatRef<'_, usize, f64>) -> Result<(), Singular> {
         self.adopt(a);
+        self.analyze_adopted(a)
+    }
+
+    /// [`Self::analyze`] for a matrix whose pattern [`Self::adopt`] has seen.
+    fn analyze_adopted(&mut self, a: SparseColMatRef<'_, usize, f64>) -> Result<(), Singular> {
         if self.llt.is_none() {
             let ord = match &self.order {
                 Some((fwd, inv)) if fwd.len() == a.nrows() => {
@@ -226,7 +231,7 @@ impl LinearSolver {
     ) -> Result<Factor, Singular> {
         self.adopt(a);
         if structure != Structure::Unsymmetric {
-            self.analyze(a)?;
+            self.analyze_adopted(a)?;
             let symbolic = self.llt.clone().expect("analysed");
             if structure == Structure::SymmetricDefinite
                 && let Some(f) = llt(&symbolic, a)?

@@ -138,10 +138,24 @@ fn a_centre_or_radius_far_outside_the_model_is_refused() {
             .contains("centre [1e300, 0.0, 0.0] is more than"),
         "{e}"
     );
-    let mut huge = def;
+    let mut huge = def.clone();
     huge.radius = 1e300;
     let e = tricontact_fem::hertz::HertzSetup::resolve(&huge, &an).expect_err("huge radius");
     assert!(e.to_string().contains("radius 1e300 exceeds"), "{e}");
+    // An axis is normalised without squaring its components (1e200 overflowed and was refused
+    // as zero); one that is not finite is refused as such.
+    let mut long = def.clone();
+    long.axis = [0.0, 0.0, 1e200];
+    let setup = tricontact_fem::hertz::HertzSetup::resolve(&long, &an).expect("a long axis");
+    assert_eq!(setup.axis, [0.0, 0.0, 1.0]);
+    let mut nan = def;
+    nan.axis = [f64::NAN, 0.0, 1.0];
+    let e = tricontact_fem::hertz::HertzSetup::resolve(&nan, &an).expect_err("NaN axis");
+    assert!(
+        e.to_string()
+            .contains("[hertz] axis must be finite and not zero"),
+        "{e}"
+    );
 }
 
 /// A modulus taken from an invalid slave material is not quoted back as if the user had given
