@@ -284,7 +284,8 @@ pub fn resolve(
     let mut problems = Vec::new();
     if def.two_pass && def.method == ContactMethod::Multiplier {
         problems.push(format!(
-            "{}contact '{name}': two_pass with method = \"multiplier\" gives redundant constraints (each node pair constrained twice, a singular saddle-point system); use single pass or the penalty or augmented method", at("two_pass")
+            "{}contact '{name}': two_pass with method = \"multiplier\" gives redundant constraints (each node pair constrained twice, a singular saddle-point system); use single pass or the penalty or augmented method",
+            at("two_pass")
         ));
     }
     if let Some(a) = def.penalty
@@ -441,7 +442,8 @@ pub fn resolve(
     let modulus_valid = e > 0.0 && e.is_finite();
     if def.penalty.is_none() && modulus_valid && !(penalty > 0.0 && penalty.is_finite()) {
         problems.push(format!(
-            "{}contact '{name}': the default penalty 10 E h is {penalty:e} (E = {e:e}, h = {h_mean:e}); give `penalty`", at("penalty")
+            "{}contact '{name}': the default penalty 10 E h is {penalty:e} (E = {e:e}, h = {h_mean:e}); give `penalty`",
+            at("penalty")
         ));
     }
     if !problems.is_empty() {
