@@ -723,12 +723,8 @@ fn two_problem_model(name: &str) -> (PathBuf, [String; 2]) {
 #[test]
 fn run_lists_several_problems_with_their_lines() {
     let (model, prefixes) = two_problem_model("run-many");
-    let o = bin()
-        .args(["run".as_ref(), model.as_os_str()])
-        .output()
-        .expect("runs");
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success());
+    let (ok, _, stderr) = outcome("run", &model);
+    assert!(!ok);
     let lines: Vec<&str> = stderr.lines().collect();
     assert_eq!(lines[0], "error: invalid model, 2 problems:", "{stderr}");
     for p in &prefixes {
@@ -744,18 +740,11 @@ fn run_lists_several_problems_with_their_lines() {
 #[test]
 fn check_lists_several_problems_with_one_prefix() {
     let (model, prefixes) = two_problem_model("check-many");
-    let o = bin()
-        .args(["check".as_ref(), model.as_os_str()])
-        .output()
-        .expect("runs");
-    let (stdout, stderr) = (
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr),
-    );
-    assert!(!o.status.success());
-    assert!(stdout.contains("2 problem(s):"), "{stdout}");
+    let (ok, text, stderr) = outcome("check", &model);
+    assert!(!ok);
+    assert!(text.contains("2 problem(s):"), "{text}");
     for p in &prefixes {
-        assert!(stdout.lines().any(|l| l.starts_with(p)), "{p} in {stdout}");
+        assert!(text.lines().any(|l| l.starts_with(p)), "{p} in {text}");
     }
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
     assert_eq!(stderr.matches("invalid model").count(), 1, "{stderr}");
