@@ -432,3 +432,35 @@ pub fn assemble(
         predictor,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Free DOFs of active nodes are numbered in order, then the extra unknowns; a `prescribed`
+    /// of the wrong length is refused by name (a short one panicked on an index, a long one was
+    /// accepted).
+    #[test]
+    fn dofs_are_numbered_and_sizes_checked() {
+        let dm = DofMap::new(
+            &[true, false],
+            &[false, true, false, false, false, false],
+            2,
+        );
+        assert_eq!(dm.eq, [0, NO_EQ, 1, NO_EQ, NO_EQ, NO_EQ, 2, 3]);
+        assert_eq!((dm.n_eq, dm.n_nodal), (4, 6));
+        for len in [5, 7] {
+            let wrong =
+                std::panic::catch_unwind(|| DofMap::new(&[true, true], &vec![false; len], 0));
+            let message = wrong.expect_err("a prescribed list of the wrong length");
+            let text = message
+                .downcast_ref::<String>()
+                .cloned()
+                .unwrap_or_default();
+            assert!(
+                text.contains("DofMap::new: one prescribed flag per nodal DOF"),
+                "{len}: {text}"
+            );
+        }
+    }
+}

@@ -309,6 +309,14 @@ pub fn pvd_string(entries: &[(f64, String)]) -> std::io::Result<String> {
 mod tests {
     use super::*;
 
+    /// A tet10's cell takes ten nodes: nine panicked on an index out of bounds in the reorder,
+    /// now on the stated size.
+    #[test]
+    #[should_panic(expected = "vtk_cell: a Tet10 has 10 nodes")]
+    fn a_cell_of_the_wrong_size_is_refused_by_name() {
+        let _ = vtk_cell(ElementKind::Tet10, &[0, 1, 2, 3, 4, 5, 6, 7, 8]);
+    }
+
     #[test]
     fn writes_counts_types_and_data() {
         let pts = [
