@@ -553,8 +553,13 @@ pub fn resolve(
             .map(|a| m_proxies.get(a).cloned().unwrap_or_default())
             .collect();
         let (_, s_max) = edge_lengths(mesh, &s_facets);
-        let surface = Surface::new(s_facets, mesh.nodes.len())
-            .map_err(|e| vec![surface_error(&name, &e, &s_tags, mesh)])?;
+        let surface = Surface::new(s_facets, mesh.nodes.len()).map_err(|e| {
+            vec![format!(
+                "{}{}",
+                at("slave"),
+                surface_error(&name, &e, &s_tags, mesh)
+            )]
+        })?;
         passes.push(Pass {
             slaves: m_nodes,
             areas,
