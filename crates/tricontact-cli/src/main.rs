@@ -20,7 +20,7 @@ use tricontact_fem::hertz::HertzSetup;
 use tricontact_fem::model::Model;
 use tricontact_fem::output::ResultWriter;
 use tricontact_fem::report::{self, RunRecord};
-use tricontact_fem::{FemError, atomic, gmsh, inp, rigid};
+use tricontact_fem::{FemError, atomic, inp, rigid};
 
 /// `println!` that ends the program quietly when standard output is closed (e.g. piped into
 /// `head`), instead of panicking: results are written atomically, so nothing is left half-written.
@@ -242,7 +242,7 @@ fn run(
     verbose: bool,
 ) -> Result<(), FemError> {
     let model = Model::load_with_mesh(model_path, mesh_override.as_deref())?;
-    let mesh = gmsh::read_msh(&model.mesh_path())?;
+    let mesh = model.read_mesh()?;
     mesh.check()?;
     let (an, hertz, mut problems) = resolve(&model, mesh);
     if output.is_none() {
@@ -379,7 +379,7 @@ fn export(
 ) -> Result<(), String> {
     let model =
         Model::load_with_mesh(model_path, mesh_override.as_deref()).map_err(|e| e.to_string())?;
-    let mesh = gmsh::read_msh(&model.mesh_path()).map_err(|e| e.to_string())?;
+    let mesh = model.read_mesh().map_err(|e| e.to_string())?;
     let an = Analysis::new(&model, mesh).map_err(|e| e.to_string())?;
     let title = format!(
         "{} (mesh {})",
@@ -429,7 +429,7 @@ fn check_deck_path(path: &Path, inputs: &[&Path]) -> Result<(), String> {
 
 fn check(model_path: &Path, mesh_override: Option<PathBuf>) -> Result<(), FemError> {
     let model = Model::load_with_mesh(model_path, mesh_override.as_deref())?;
-    let mesh = gmsh::read_msh(&model.mesh_path())?;
+    let mesh = model.read_mesh()?;
     say!("model: {}", model_path.display());
     say!("mesh:  {}", model.mesh_path().display());
     say!("nodes: {}", mesh.nodes.len());

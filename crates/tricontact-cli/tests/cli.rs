@@ -795,3 +795,43 @@ fn an_output_folder_that_is_a_file_is_a_model_problem() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A mesh that cannot be read is reported at the model's `[mesh] file` line, by every command
+/// that reads it; one given by `--mesh` is reported by its path alone.
+#[test]
+fn an_unreadable_mesh_names_the_model_line() {
+    let dir = temp_dir("mesh-missing");
+    let text = std::fs::read_to_string(example()).expect("model");
+    let line = 1 + text
+        .lines()
+        .position(|l| l.trim_start().starts_with("file"))
+        .expect("a [mesh] file line");
+    let model = dir.join("model.toml");
+    std::fs::create_dir_all(dir.join("folder.msh")).expect("a folder");
+    for (name, reason) in [
+        ("nosuch.msh", "No such file"),
+        ("folder.msh", "not a regular file"),
+    ] {
+        let src = text.replace("beam.msh", name);
+        assert_ne!(src, text, "the example names beam.msh");
+        std::fs::write(&model, src).expect("model");
+        for cmd in ["check", "run", "export"] {
+            let (ok, _, stderr) = outcome(cmd, &model);
+            let at = format!("{}:{line}: mesh ", model.display());
+            assert!(
+                !ok && stderr.contains(&at) && stderr.contains(name) && stderr.contains(reason),
+                "{cmd} {name}: {stderr}"
+            );
+        }
+    }
+    let o = bin()
+        .args(["check".as_ref(), example().as_os_str(), "--mesh".as_ref()])
+        .arg(dir.join("nosuch.msh"))
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && stderr.contains("nosuch.msh") && !stderr.contains(".toml:"),
+        "{stderr}"
+    );
+}

@@ -55,6 +55,6 @@ pub use error::{FemError, Result};
 /// Any model, mesh or validation error.
 pub fn load_analysis(model_path: &std::path::Path) -> Result<analysis::Analysis> {
     let model = model::Model::load(model_path)?;
-    let mesh = gmsh::read_msh(&model.mesh_path())?;
+    let mesh = model.read_mesh()?;
     analysis::Analysis::new(&model, mesh)
 }

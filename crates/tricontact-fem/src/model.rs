@@ -10,6 +10,8 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use crate::error::{FemError, Result};
+use crate::gmsh;
+use crate::mesh::Mesh;
 use crate::source::SourceMap;
 use crate::vtu::VtuFormat;
 
@@ -437,6 +439,8 @@ impl Model {
         let mut model = Self::load(path)?;
         if let Some(m) = mesh {
             model.mesh.file = std::path::absolute(m).map_err(|e| FemError::io(m, e))?;
+            // Problems with this mesh are the command line's, not the model file's.
+            model.source.forget("mesh");
         }
         Ok(model)
     }
@@ -482,6 +486,24 @@ impl Model {
             });
         }
         Ok(model)
+    }
+
+    /// Reads the mesh ([`Model::mesh_path`]). A file that cannot be opened, or is not a regular
+    /// file, is a problem of the model, reported at its `[mesh] file` line.
+    ///
+    /// # Errors
+    /// As [`gmsh::read_msh`].
+    pub fn read_mesh(&self) -> Result<Mesh> {
+        let path = self.mesh_path();
+        gmsh::read_msh(&path).map_err(|e| {
+            let reason = match &e {
+                FemError::Io { source, .. } => source.to_string(),
+                FemError::Mesh { message, .. } if !path.is_file() => message.clone(),
+                _ => return e,
+            };
+            let at = self.source.at("mesh", 0, "file");
+            FemError::Invalid(vec![format!("{at}mesh {}: {reason}", path.display())])
+        })
     }
 
     /// The mesh path resolved against the model folder.

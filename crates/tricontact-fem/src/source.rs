@@ -81,6 +81,11 @@ impl SourceMap {
         }
     }
 
+    /// Forgets the lines of every `[table]` (its entries then have no place in the file).
+    pub fn forget(&mut self, table: &str) {
+        self.lines.retain(|(t, _, _), _| t != table);
+    }
+
     /// The line of a place: its key's, else its table's header (`None` when neither is in the
     /// file).
     #[must_use]

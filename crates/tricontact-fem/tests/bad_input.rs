@@ -91,13 +91,23 @@ fn unknown_group_lists_the_existing_groups() {
 }
 
 #[test]
-fn missing_mesh_file_names_the_path() {
+fn missing_mesh_file_names_the_path_and_the_model_line() {
     let d = temp_dir("missing");
     let p = d.join("model.toml");
     std::fs::write(&p, model_text("solid", "").replace("m.msh", "nowhere.msh")).expect("write");
     let e = load_analysis(&p).expect_err("missing mesh");
-    assert!(matches!(e, FemError::Io { .. }));
-    assert!(e.to_string().contains("nowhere.msh"), "{e}");
+    assert!(matches!(e, FemError::Invalid(_)), "{e}");
+    // Reported at the model's `[mesh] file` line.
+    let text = std::fs::read_to_string(&p).expect("model");
+    let line = 1 + text
+        .lines()
+        .position(|l| l.contains("nowhere.msh"))
+        .expect("the file line");
+    let msg = e.to_string();
+    assert!(
+        msg.contains(&format!("model.toml:{line}: mesh ")) && msg.contains("nowhere.msh"),
+        "{msg}"
+    );
 }
 
 /// A model path that is not a regular file (a device, a folder) is refused before it is read:
