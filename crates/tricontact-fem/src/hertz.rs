@@ -42,24 +42,35 @@ pub struct Hertz {
 }
 
 impl Hertz {
-    /// Contact radius `a(F)`.
+    /// Contact radius `a(F) = F^(1/3) (3R/(4E*))^(1/3)`; 0 without a compressive force (`F ≤ 0`:
+    /// no contact). The cube roots are taken apart so that a tiny force does not underflow.
     #[must_use]
     pub fn contact_radius(&self, force: f64) -> f64 {
-        (3.0 * force * self.radius / (4.0 * self.modulus)).cbrt()
+        if force <= 0.0 {
+            return 0.0;
+        }
+        force.cbrt() * (3.0 * self.radius / (4.0 * self.modulus)).cbrt()
     }
 
-    /// Peak pressure `p0(F)`.
+    /// Peak pressure `p0(F)`; 0 when `F ≤ 0`. Written as `(3/(2π)) F^(1/3) (4E*/(3R))^(2/3)`
+    /// rather than `3F/(2πa²)`, which is `0/0` where `a²` underflows.
     #[must_use]
     pub fn peak_pressure(&self, force: f64) -> f64 {
-        let a = self.contact_radius(force);
-        3.0 * force / (2.0 * std::f64::consts::PI * a * a)
+        if force <= 0.0 {
+            return 0.0;
+        }
+        let stiffness = (4.0 * self.modulus / (3.0 * self.radius)).cbrt();
+        3.0 / (2.0 * std::f64::consts::PI) * force.cbrt() * stiffness * stiffness
     }
 
-    /// Pressure `p(r)` under the force `F` (0 outside the contact).
+    /// Pressure `p(r)` under the force `F` (0 outside the contact, and when `F ≤ 0`).
     #[must_use]
     pub fn pressure(&self, force: f64, r: f64) -> f64 {
         let a = self.contact_radius(force);
-        self.peak_pressure(force) * (1.0 - (r / a).powi(2)).max(0.0).sqrt()
+        if a == 0.0 || r.abs() >= a {
+            return 0.0;
+        }
+        self.peak_pressure(force) * (1.0 - (r / a).powi(2)).sqrt()
     }
 
     /// Coefficient `k` of `δ = k F^(2/3)`.
@@ -461,6 +472,28 @@ mod tests {
         assert!((2.0 * std::f64::consts::PI * p0 * a * a / 3.0 - f).abs() < 1e-9 * f);
         assert!((STEEL.pressure(f, 0.6 * a) - 0.8 * p0).abs() < 1e-12 * p0);
         assert_eq!(STEEL.pressure(f, 1.01 * a), 0.0);
+    }
+
+    /// Without a compressive force there is no contact: every quantity is zero, never NaN, also
+    /// for forces so small that `a²` underflows.
+    #[test]
+    fn no_force_no_contact_and_tiny_forces_stay_finite() {
+        for f in [0.0, -0.0, -5.0, f64::NEG_INFINITY] {
+            assert_eq!(STEEL.contact_radius(f), 0.0, "{f}");
+            assert_eq!(STEEL.peak_pressure(f), 0.0, "{f}");
+            assert_eq!(STEEL.pressure(f, 0.0), 0.0, "{f}");
+            assert_eq!(STEEL.approach(f), 0.0, "{f}");
+        }
+        for f in [1e-300, f64::MIN_POSITIVE, 5e-324] {
+            let (a, p0) = (STEEL.contact_radius(f), STEEL.peak_pressure(f));
+            assert!(a > 0.0 && p0 > 0.0 && p0.is_finite(), "{f}: {a} {p0}");
+            assert!(STEEL.pressure(f, 0.0).is_finite(), "{f}");
+        }
+        // The closed form of p0 is 3F/(2πa²).
+        let f = 20_000.0;
+        let a = STEEL.contact_radius(f);
+        let p0 = 3.0 * f / (2.0 * std::f64::consts::PI * a * a);
+        assert!((STEEL.peak_pressure(f) / p0 - 1.0).abs() < 1e-14);
     }
 
     #[test]
