@@ -36,6 +36,21 @@ pub fn read_msh(path: &Path) -> Result<Mesh> {
     parse_msh(&bytes, path)
 }
 
+/// `", reading stopped at line N"` (an ASCII file) or `"… at byte N"` (a binary one): the
+/// position of `rest`, a slice of `bytes` (`None` when it is not one). The parser reads numbers
+/// across line breaks, so a short line shows where reading ran out, below it. The version line `4.1 <file-type> <size>` tells
+/// the file type.
+fn place(bytes: &[u8], rest: &[u8], version_line: &str) -> Option<String> {
+    let offset = (rest.as_ptr() as usize).checked_sub(bytes.as_ptr() as usize)?;
+    let before = bytes.get(..offset)?;
+    if version_line.split_whitespace().nth(1) == Some("0") {
+        let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
+        Some(format!(", reading stopped at line {line}"))
+    } else {
+        Some(format!(", reading stopped at byte {offset}"))
+    }
+}
+
 /// Parses the `$PhysicalNames` section: `(dim, tag) -> name`.
 ///
 /// # Errors
@@ -177,8 +192,14 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<Mesh> {
         let hint = unfinished
             .map(|s| format!(" (the file ends inside {s}: is it complete?)"))
             .unwrap_or_default();
+        // Where the innermost parser stopped (its input is a slice of `bytes`).
+        let place = e
+            .backtrace
+            .first()
+            .and_then(|(rest, _)| place(bytes, rest, &version_line))
+            .unwrap_or_default();
         merr(format!(
-            "parse error: {}{hint}",
+            "parse error{place}: {}{hint}",
             text.split_whitespace().collect::<Vec<_>>().join(" ")
         ))
     })?;

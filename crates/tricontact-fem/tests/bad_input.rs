@@ -781,3 +781,43 @@ fn an_unused_material_is_noted_with_its_line() {
         )]
     );
 }
+
+/// A line the Gmsh parser cannot read is named by its number (in an ASCII file), whichever
+/// section it is in.
+#[test]
+fn a_malformed_mesh_line_is_named_by_its_number() {
+    let good = msh(4, &TET);
+    let lines: Vec<&str> = good.lines().collect();
+    let at = |needle: &str| 1 + lines.iter().position(|l| *l == needle).expect(needle);
+    for (from, to) in [
+        ("0 1 0", "0 x 0"),                             // a node's coordinates
+        ("3 1 4 1", "3 1 4 one"),                       // an element block's header
+        ("1 4 1 4", "1 4 1 four"),                      // the $Nodes header
+        ("1 0 0 0 1 1 1 1 1 0", "1 0 0 0 1 1 1 1 q 0"), // a volume entity
+    ] {
+        let line = at(from);
+        let bad = good.replacen(&format!("\n{from}\n"), &format!("\n{to}\n"), 1);
+        assert_ne!(bad, good, "{from}");
+        let e = gmsh::parse_msh(bad.as_bytes(), Path::new("l.msh")).expect_err(to);
+        let msg = e.to_string();
+        assert!(matches!(e, FemError::Mesh { .. }), "{msg}");
+        assert!(msg.contains(&format!("line {line}")), "{to}: {msg}");
+        assert!(!msg.contains('\n'), "one line: {msg}");
+    }
+}
+
+/// In a binary file the place is a byte offset (lines mean nothing there).
+#[test]
+fn a_malformed_binary_mesh_is_named_by_its_byte() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/beam_binary.msh");
+    let bytes = std::fs::read(path).expect("binary mesh");
+    let start = bytes
+        .windows(9)
+        .position(|w| w == b"$Elements")
+        .expect("$Elements");
+    let cut = &bytes[..start + 30];
+    let e = gmsh::parse_msh(cut, Path::new("b.msh")).expect_err("cut short");
+    let msg = e.to_string();
+    assert!(msg.contains("reading stopped at byte "), "{msg}");
+    assert!(!msg.contains("line"), "{msg}");
+}
