@@ -3,7 +3,8 @@
 //! * `<stem>_<step>_<increment>.vtu` per converged increment (every
 //!   `output.every`-th and the last of each step): point data
 //!   `displacement`, `reaction`, `stress` (nodal average of element Cauchy
-//!   stress), `von_mises`; cell data `stress`, `von_mises`, `material`;
+//!   stress), `von_mises`; cell data `stress`, `von_mises`, `material`; the faces of rigid
+//!   contact surfaces are cells after the elements (material −1, zero stress);
 //! * `<stem>.pvd`: the collection, `timestep` = step index + load factor,
 //!   rewritten after each `.vtu` so ParaView can open a running job;
 //! * `history.csv`: one row per converged increment (rewritten when due, see
@@ -54,6 +55,34 @@ fn is_model_vtu(name: &str, stem: &str) -> bool {
     matches!(core.split_once('_'), Some((s, i)) if numeric(s, 3) && numeric(i, 4))
 }
 
+/// The faces of the contact surfaces that touch no body element (a rigid master: a surface
+/// group without volume elements), each once, in element order. They are written as cells after
+/// the body elements, so that ParaView draws the rigid surface and its nodes' fields.
+fn rigid_faces(an: &Analysis) -> Vec<usize> {
+    let mut in_body = vec![false; an.mesh.nodes.len()];
+    for b in &an.body {
+        for &a in &an.mesh.elements[b.element].nodes {
+            in_body[a] = true;
+        }
+    }
+    let mut faces: Vec<usize> = an
+        .contacts
+        .iter()
+        .flat_map(|c| [&c.master_group, &c.slave_group])
+        .filter_map(|name| {
+            an.mesh
+                .groups
+                .iter()
+                .find(|g| &g.name == name && g.dim == 2)
+        })
+        .flat_map(|g| g.elements.iter().copied())
+        .filter(|&e| an.mesh.elements[e].nodes.iter().all(|&a| !in_body[a]))
+        .collect();
+    faces.sort_unstable();
+    faces.dedup();
+    faces
+}
+
 /// Removes `path`; one that is not there is fine.
 fn remove_if_present(path: &Path) -> Result<()> {
     match std::fs::remove_file(path) {
@@ -85,6 +114,9 @@ pub struct ResultWriter {
     dir: PathBuf,
     stem: String,
     cells: Vec<(u8, Vec<usize>)>,
+    /// Cells after the body elements' (the last ones of `cells`): faces of rigid contact
+    /// surfaces ([`rigid_faces`]).
+    rigid_faces: usize,
     pvd: Vec<(f64, String)>,
     history: String,
     header_done: bool,
@@ -161,11 +193,14 @@ impl ResultWriter {
         }
         std::fs::create_dir_all(dir).map_err(|e| FemError::io(dir, e))?;
         remove_stale(dir, stem)?;
+        let rigid = rigid_faces(an);
         let cells = an
             .body
             .iter()
-            .map(|b| {
-                let el = &an.mesh.elements[b.element];
+            .map(|b| b.element)
+            .chain(rigid.iter().copied())
+            .map(|e| {
+                let el = &an.mesh.elements[e];
                 vtk_cell(el.kind, &el.nodes)
             })
             .collect();
@@ -191,6 +226,7 @@ impl ResultWriter {
             dir: dir.to_path_buf(),
             stem: stem.to_string(),
             cells,
+            rigid_faces: rigid.len(),
             pvd: Vec::new(),
             history,
             header_done: false,
@@ -303,8 +339,21 @@ impl ResultWriter {
             info.increment
         );
         let n = an.mesh.nodes.len();
-        let fields = stress_fields(an, info.u, info.nlgeom);
-        let material: Vec<f64> = an.body.iter().map(|b| b.material as f64).collect();
+        let mut fields = stress_fields(an, info.u, info.nlgeom);
+        // Rigid faces carry no stress; their material is −1.
+        let rigid = self.rigid_faces;
+        fields
+            .cell_stress
+            .resize(fields.cell_stress.len() + 6 * rigid, 0.0);
+        fields
+            .cell_von_mises
+            .resize(fields.cell_von_mises.len() + rigid, 0.0);
+        let material: Vec<f64> = an
+            .body
+            .iter()
+            .map(|b| b.material as f64)
+            .chain(std::iter::repeat_n(-1.0, rigid))
+            .collect();
         let mut point_data = vec![
             Field {
                 name: "displacement",

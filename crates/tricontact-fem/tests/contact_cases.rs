@@ -599,6 +599,61 @@ fn block_pressed_by_a_rigid_tool_without_volume_elements() {
     assert!(e.contains("rigid contact surface"), "{e}");
 }
 
+/// A rigid tool has no volume elements: its contact faces are written to the `.vtu` as cells
+/// (material −1, zero stress), so that ParaView draws the tool and its forces.
+#[test]
+fn a_rigid_tools_faces_are_cells_of_the_vtu() {
+    let mesh = small_blocks(ElementKind::Tet4);
+    let text = format!(
+        "[[material]]\nname = \"m\"\ntype = \"linear_elastic\"\nE = 1000.0\nnu = 0.3\n[[body]]\ngroup = \"upper_solid\"\nmaterial = \"m\"\n[[boundary]]\ngroup = \"lower_zmax\"\ndisplacement = {{ x = 0.0, y = 0.0, z = 0.01 }}\n[[boundary]]\ngroup = \"upper_zmax\"\nfix = [\"x\", \"y\", \"z\"]\n{}[[step]]\n[output]\nvtu_format = \"ascii\"\n",
+        contact("multiplier", "")
+    );
+    let an = common::analysis(mesh, &text);
+    let tool = an
+        .mesh
+        .groups
+        .iter()
+        .find(|g| g.name == "lower_zmax")
+        .expect("tool group");
+    let faces = tool.elements.len();
+    assert!(faces > 0);
+    let dir = std::env::temp_dir().join(format!("tricontact-rigid-vtu-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut w = tricontact_fem::output::ResultWriter::new(&an, &dir, "m").expect("writer");
+    let mut terms = ContactTerms::new(&an);
+    tricontact_fem::driver::run(&an, &mut terms, &mut |info| w.write(&an, info)).expect("run");
+    w.finish(&an).expect("finish");
+    let vtu = std::fs::read_to_string(dir.join("m_001_0001.vtu")).expect("vtu");
+    let cells = an.body.len() + faces;
+    assert!(
+        vtu.contains(&format!("NumberOfCells=\"{cells}\"")),
+        "{} body cells and {faces} faces expected",
+        an.body.len()
+    );
+    // The `material` array: each body's index, then −1 for each face of the tool.
+    let array = |name: &str| -> Vec<f64> {
+        let start = vtu.find(&format!("Name=\"{name}\"")).expect(name);
+        let body = &vtu[start..];
+        let open = body.find('>').expect("tag end") + 1;
+        let close = body.find("</DataArray>").expect("array end");
+        body[open..close]
+            .split_whitespace()
+            .map(|v| v.parse().expect("number"))
+            .collect()
+    };
+    let material = array("material");
+    assert_eq!(material.len(), cells);
+    assert!(material[..an.body.len()].iter().all(|&m| m >= 0.0));
+    assert!(material[an.body.len()..].iter().all(|&m| m == -1.0));
+    let types = array("types");
+    assert!(
+        types[an.body.len()..].iter().all(|&t| t == 5.0),
+        "{types:?}"
+    );
+    assert!(!vtu.contains("NaN"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn contact_fields_and_history_columns_are_written() {
     let mesh = small_blocks(ElementKind::Hex8);
