@@ -404,6 +404,7 @@ impl ResultWriter {
                     values: &material,
                 },
             ],
+            time: Some(info.time),
         };
         let xml =
             vtu_string(&grid, an.output.vtu_format).map_err(|e| FemError::Output(e.to_string()))?;

@@ -79,6 +79,9 @@ pub struct Grid<'a> {
     pub point_data: Vec<Field<'a>>,
     /// Cell data.
     pub cell_data: Vec<Field<'a>>,
+    /// The state's time, written as the field `TimeValue` (what ParaView reads to place a file
+    /// of a series in time when the `.vtu` files are opened without their `.pvd`).
+    pub time: Option<f64>,
 }
 
 /// How the data arrays of a `.vtu` are written (`[output] vtu_format`).
@@ -149,6 +152,14 @@ fn encode<T: Scalar>(values: impl Iterator<Item = T>, format: VtuFormat) -> Stri
     s
 }
 
+/// The `format` attribute of a data array.
+fn format_name(format: VtuFormat) -> &'static str {
+    match format {
+        VtuFormat::Ascii => "ascii",
+        VtuFormat::Binary => "binary",
+    }
+}
+
 fn data_array<W: std::io::Write, T: Scalar>(
     w: &mut Writer<W>,
     (name, components): (&str, usize),
@@ -157,10 +168,7 @@ fn data_array<W: std::io::Write, T: Scalar>(
 ) -> std::io::Result<()> {
     let comps = components.to_string();
     let text = encode(values, format);
-    let format = match format {
-        VtuFormat::Ascii => "ascii",
-        VtuFormat::Binary => "binary",
-    };
+    let format = format_name(format);
     w.create_element("DataArray")
         .with_attribute(("type", T::VTK))
         .with_attribute(("Name", name))
@@ -235,6 +243,18 @@ pub fn vtu_string(g: &Grid<'_>, format: VtuFormat) -> std::io::Result<String> {
         .write_inner_content(|w| {
             w.create_element("UnstructuredGrid")
                 .write_inner_content(|w| {
+                    if let Some(t) = g.time {
+                        w.create_element("FieldData").write_inner_content(|w| {
+                            let text = encode(std::iter::once(t), format);
+                            w.create_element("DataArray")
+                                .with_attribute(("type", f64::VTK))
+                                .with_attribute(("Name", "TimeValue"))
+                                .with_attribute(("NumberOfTuples", "1"))
+                                .with_attribute(("format", format_name(format)))
+                                .write_text_content(BytesText::from_escaped(text))?;
+                            Ok(())
+                        })?;
+                    }
                     w.create_element("Piece")
                         .with_attribute(("NumberOfPoints", npts.as_str()))
                         .with_attribute(("NumberOfCells", ncells.as_str()))
@@ -336,8 +356,29 @@ mod tests {
                 values: &u,
             }],
             cell_data: vec![],
+            time: None,
         };
         let s = vtu_string(&g, VtuFormat::Ascii).expect("xml");
+        assert!(!s.contains("TimeValue"));
+        for format in [VtuFormat::Ascii, VtuFormat::Binary] {
+            let timed = vtu_string(
+                &Grid {
+                    time: Some(1.5),
+                    ..g.clone()
+                },
+                format,
+            )
+            .expect("xml");
+            let field = timed.find("<FieldData>").expect("field data");
+            assert!(
+                field < timed.find("<Piece").expect("piece"),
+                "before the piece"
+            );
+            assert!(timed.contains("Name=\"TimeValue\" NumberOfTuples=\"1\""));
+            if format == VtuFormat::Ascii {
+                assert!(timed.contains(">1.5</DataArray>"), "{timed}");
+            }
+        }
         assert!(s.contains("NumberOfPoints=\"4\""));
         assert!(s.contains("NumberOfCells=\"1\""));
         assert!(s.contains("Name=\"displacement\""));
@@ -438,10 +479,11 @@ mod tests {
                 components: 1,
                 values: &s[..2],
             }],
+            time: Some(0.25),
         };
         let ascii = arrays(&vtu_string(&grid, VtuFormat::Ascii).expect("xml"));
         let binary = arrays(&vtu_string(&grid, VtuFormat::Binary).expect("xml"));
-        assert_eq!(ascii.len(), 6);
+        assert_eq!(ascii.len(), 7, "six arrays and the time");
         assert_eq!(binary.len(), ascii.len());
         for ((name, ty, fa, text), (name_b, ty_b, fb, encoded)) in ascii.iter().zip(&binary) {
             assert_eq!(
@@ -474,8 +516,14 @@ mod tests {
                 }
             }
         }
+        // The time, exactly.
+        let (_, _, _, time) = binary
+            .iter()
+            .find(|a| a.0 == "TimeValue")
+            .expect("the time");
+        assert_eq!(decode(time), 0.25f64.to_le_bytes());
         // The point data hold exactly the field given.
-        let (_, _, _, text) = &binary[4];
+        let (_, _, _, text) = binary.iter().find(|a| a.0 == "s").expect("the point field");
         let got: Vec<u64> = decode(text)
             .chunks_exact(8)
             .map(|b| u64::from_le_bytes(b.try_into().unwrap()))

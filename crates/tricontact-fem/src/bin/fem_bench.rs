@@ -100,6 +100,7 @@ fn vtu_encoding(n: usize) {
             field("von_mises", 1, &cvm),
             field("material", 1, &mat),
         ],
+        time: Some(1.0),
     };
     println!(
         "vtu of the hex8 cube {n}^3: {} nodes, {} cells (one thread)",
