@@ -707,6 +707,57 @@ fn a_nan_search_distance_finds_nothing() {
     );
 }
 
+/// A finite query so far from the surface that its squared distances overflow (beyond about
+/// 10¹⁵⁴) still has an answer, the brute force's (every facet ties at `+∞`, so the lowest index):
+/// a box at an infinite squared distance is not an empty slot.
+#[test]
+fn very_distant_queries_are_answered_as_by_brute_force() {
+    let (nodes, facets) = torus(20, 10, 2.0, 0.6);
+    let surface = Surface::new(facets, nodes.len()).unwrap();
+    let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+    let far: Vec<Query> = [1e150, 1e155, 1e200, -1e300]
+        .iter()
+        .flat_map(|&x| {
+            [
+                Query::point(Vec3::new(x, 2.0, 0.0)),
+                Query::point(Vec3::new(0.5, x, -x)),
+            ]
+        })
+        .collect();
+    let all = bvh.closest_all(&surface, &far, f64::INFINITY);
+    for (q, batch) in far.iter().zip(all) {
+        let expect = brute_force_closest(&surface, &nodes, q, f64::INFINITY);
+        assert!(expect.is_some(), "{:?}", q.point);
+        assert_eq!(
+            bvh.closest(&surface, q, f64::INFINITY).map(|h| h.facet),
+            expect.map(|h| h.facet),
+            "{:?}",
+            q.point
+        );
+        assert_eq!(
+            batch.map(|h| h.facet),
+            expect.map(|h| h.facet),
+            "{:?}",
+            q.point
+        );
+    }
+    // The incremental search, from lists made for those queries, after no motion.
+    let lists = Neighbourhoods::new(&bvh, &surface, &nodes, &far, 0.1).unwrap();
+    let mut tree = bvh.clone();
+    let (again, _) = lists
+        .closest_all(&mut tree, &surface, &nodes, &far, f64::INFINITY)
+        .unwrap();
+    for (q, hit) in far.iter().zip(again) {
+        let expect = brute_force_closest(&surface, &nodes, q, f64::INFINITY);
+        assert_eq!(
+            hit.map(|h| h.facet),
+            expect.map(|h| h.facet),
+            "{:?}",
+            q.point
+        );
+    }
+}
+
 /// A large batch in random order is answered in Z-order and put back: the same answers as the
 /// batch in surface order, as single queries and as brute force, with self-exclusion and a search
 /// distance, for any thread count.

@@ -242,11 +242,12 @@ impl Bvh {
                 let node = &self.nodes[child as usize];
                 // Children within the bound, farthest pushed first so the nearest is popped next;
                 // every slot is written and the top only advances for an accepted child, so the
-                // push has no branch. Empty slots are infinitely far; an unbounded query must still
-                // skip them.
+                // push has no branch. Empty slots are infinitely far, and so is a real child whose
+                // squared distance overflowed (a query beyond about 10¹⁵⁴): the slot's reference,
+                // not its distance, tells them apart.
                 for (d, c) in farthest_first(node.child_distances_squared(p), node.child) {
                     stack[top] = (c, d);
-                    top += usize::from(d <= bound && d < f64::INFINITY);
+                    top += usize::from(d <= bound && c != EMPTY);
                 }
             }
         });
