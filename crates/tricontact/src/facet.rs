@@ -158,11 +158,15 @@ impl Facet {
     #[must_use]
     #[inline]
     pub fn opposite_edge(&self, a: usize) -> Vec3 {
+        assert!(a < 3, "facet node index {a} out of range 0..3");
         self.x[(a + 2) % 3] - self.x[(a + 1) % 3]
     }
 
     /// The inner normal of the edge opposite node `a`, `n_a = W × e_a` (not normalised:
     /// `|n_a| = |e_a|`). It points from that edge into the facet.
+    ///
+    /// # Panics
+    /// If `a > 2`.
     #[must_use]
     #[inline]
     pub fn inner_edge_normal(&self, a: usize) -> Vec3 {
@@ -171,6 +175,9 @@ impl Facet {
 
     /// `G_a = n_a/|w|`: the gradient of shape function `N_a` with respect to the slave node, an
     /// in-plane vector of length `1/h_a` (`h_a` the facet height over the edge opposite `a`).
+    ///
+    /// # Panics
+    /// If `a > 2`.
     #[must_use]
     #[inline]
     pub fn shape_gradient(&self, a: usize) -> Vec3 {
@@ -178,6 +185,9 @@ impl Facet {
     }
 
     /// `∂w/∂x_a = [e_a]×`.
+    ///
+    /// # Panics
+    /// If `a > 2`.
     #[must_use]
     #[inline]
     pub fn d_area_normal(&self, a: usize) -> Mat3 {
@@ -185,6 +195,9 @@ impl Facet {
     }
 
     /// `∂W/∂x_a = (I − W⊗W)/|w| · [e_a]×`.
+    ///
+    /// # Panics
+    /// If `a > 2`.
     #[must_use]
     #[inline]
     pub fn d_normal(&self, a: usize) -> Mat3 {

@@ -39,6 +39,9 @@ pub struct PenaltyTerms {
 impl PenaltyTerms {
     /// The resistance `R_a = α N_a P W` of the formulation: the contact force on node `a`,
     /// `R = −f`.
+    ///
+    /// # Panics
+    /// If `a > 3` (nodes `i, j, k, l` are 0 to 3).
     #[must_use]
     #[inline]
     pub fn resistance(&self, a: usize) -> Vec3 {

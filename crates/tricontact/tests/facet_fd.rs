@@ -110,3 +110,40 @@ proptest! {
         prop_assert!(sum.norm() * facet_size(&x) <= 1e-12);
     }
 }
+
+/// A local node index past 2 panics, as documented, in every per-node query (it wrapped modulo 3
+/// in all but `d_triad`).
+#[test]
+fn a_node_index_past_two_panics() {
+    let f = Facet::new(
+        Vec3::zeros(),
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+    )
+    .expect("a facet");
+    let calls: [(&str, &dyn Fn(usize)); 6] = [
+        ("opposite_edge", &|a| {
+            let _ = f.opposite_edge(a);
+        }),
+        ("inner_edge_normal", &|a| {
+            let _ = f.inner_edge_normal(a);
+        }),
+        ("shape_gradient", &|a| {
+            let _ = f.shape_gradient(a);
+        }),
+        ("d_area_normal", &|a| {
+            let _ = f.d_area_normal(a);
+        }),
+        ("d_normal", &|a| {
+            let _ = f.d_normal(a);
+        }),
+        ("d_triad", &|a| {
+            let _ = f.d_triad(a);
+        }),
+    ];
+    for (name, call) in calls {
+        call(2);
+        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| call(3)));
+        assert!(outcome.is_err(), "{name}(3) returned");
+    }
+}

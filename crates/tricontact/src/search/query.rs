@@ -94,6 +94,9 @@ impl Query {
     }
 
     /// `true` when the query skips `facet` (it contains the query's own node).
+    ///
+    /// # Panics
+    /// If the query excludes a node and `facet` is not below [`Surface::len`].
     #[must_use]
     #[inline]
     pub fn excludes(&self, surface: &Surface, facet: u32) -> bool {
@@ -142,6 +145,9 @@ impl Candidate {
 
 /// Measures one `facet` against the query with the kernel (no tree, no degeneracy check); `None`
 /// when the query excludes it.
+///
+/// # Panics
+/// As [`Surface::corners`].
 #[must_use]
 pub fn measure(surface: &Surface, positions: &[Vec3], facet: u32, q: &Query) -> Option<Hit> {
     if q.excludes(surface, facet) {
@@ -496,6 +502,10 @@ pub(crate) fn squared_limit(d: f64) -> f64 {
 /// The closest facet by checking every facet: the reference the tree is tested against, and the
 /// O(nodes × facets) search the benchmark compares with. Degenerate facets are skipped, as in the
 /// tree, and candidates are compared exactly as the tree compares them.
+///
+/// # Panics
+/// If `positions` holds no position for a node of the surface (the tree's entry points return
+/// [`SurfaceError::PositionCount`] instead).
 #[must_use]
 pub fn brute_force_closest(
     surface: &Surface,

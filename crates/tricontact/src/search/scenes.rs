@@ -13,8 +13,15 @@ use crate::linalg::Vec3;
 pub type Mesh = (Vec<Vec3>, Vec<[u32; 3]>);
 
 /// A triangulated torus with `2 nu nv` facets (`nu` around the axis, `nv` around the tube).
+///
+/// # Panics
+/// If `nu nv` exceeds `u32::MAX` (node numbers are `u32`).
 #[must_use]
 pub fn torus(nu: u32, nv: u32, big_r: f64, small_r: f64) -> Mesh {
+    assert!(
+        nu.checked_mul(nv).is_some(),
+        "torus: {nu} × {nv} nodes do not fit node numbers of 32 bits"
+    );
     let mut nodes = Vec::with_capacity((nu * nv) as usize);
     for i in 0..nu {
         let u = std::f64::consts::TAU * f64::from(i) / f64::from(nu);
@@ -84,6 +91,9 @@ pub fn shuffle<T>(v: &mut [T], seed: u64) {
 
 /// One point per facet, in facet order: a uniformly random point of the facet moved along the
 /// facet normal by a uniform offset in `[−spread, spread]` — query points near the surface.
+///
+/// # Panics
+/// If a facet names a node past the end of `nodes`.
 #[must_use]
 pub fn near_surface(nodes: &[Vec3], facets: &[[u32; 3]], spread: f64, seed: u64) -> Vec<Vec3> {
     let mut r = uniform(seed);
@@ -125,6 +135,13 @@ pub fn deformed(nodes: &[Vec3], h: f64, a: f64) -> Vec<Vec3> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Node numbers that would wrap (in a release build) are refused up front.
+    #[test]
+    #[should_panic(expected = "do not fit node numbers of 32 bits")]
+    fn a_torus_too_large_for_its_node_numbers_panics() {
+        let _ = torus(70_000, 70_000, 3.0, 1.0);
+    }
 
     #[test]
     fn a_shuffle_is_a_permutation_fixed_by_its_seed() {

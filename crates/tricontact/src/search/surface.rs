@@ -269,6 +269,10 @@ impl Surface {
     }
 
     /// The three node positions of `facet`.
+    ///
+    /// # Panics
+    /// If `facet` is not below [`Surface::len`], or `positions` holds no position for one of its
+    /// nodes.
     #[must_use]
     #[inline]
     pub fn corners(&self, facet: u32, positions: &[crate::Vec3]) -> [crate::Vec3; 3] {
@@ -281,6 +285,9 @@ impl Surface {
     }
 
     /// Facets sharing at least one node with `facet`, in increasing order.
+    ///
+    /// # Panics
+    /// If `facet` is not below [`Surface::len`].
     #[must_use]
     #[inline]
     pub fn neighbours(&self, facet: u32) -> &[u32] {
