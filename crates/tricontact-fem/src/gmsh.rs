@@ -38,8 +38,8 @@ pub fn read_msh(path: &Path) -> Result<Mesh> {
 
 /// `", reading stopped at line N"` (an ASCII file) or `"… at byte N"` (a binary one): the
 /// position of `rest`, a slice of `bytes` (`None` when it is not one). The parser reads numbers
-/// across line breaks, so a short line shows where reading ran out, below it. The version line `4.1 <file-type> <size>` tells
-/// the file type.
+/// across line breaks, so a short line shows where reading ran out, below it. The version line
+/// `4.1 <file-type> <size>` tells the file type.
 fn place(bytes: &[u8], rest: &[u8], version_line: &str) -> Option<String> {
     let offset = (rest.as_ptr() as usize).checked_sub(bytes.as_ptr() as usize)?;
     let before = bytes.get(..offset)?;

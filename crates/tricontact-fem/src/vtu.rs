@@ -202,6 +202,9 @@ fn check_grid(g: &Grid<'_>) -> std::io::Result<()> {
     if let Some(c) = g.cells.iter().position(|c| c.1.iter().any(|&a| a >= n)) {
         return bad(format!("cell {c} names a point beyond the {n} points"));
     }
+    if let Some(t) = g.time.filter(|t| !t.is_finite()) {
+        return bad(format!("time {t} is not finite"));
+    }
     for (list, count, what) in [
         (&g.point_data, n, "points"),
         (&g.cell_data, g.cells.len(), "cells"),
@@ -224,8 +227,8 @@ fn check_grid(g: &Grid<'_>) -> std::io::Result<()> {
 ///
 /// # Errors
 /// [`std::io::ErrorKind::InvalidInput`] for a grid whose parts disagree (a field without one
-/// tuple per point or cell, a cell naming a missing point); otherwise only from the in-memory
-/// writer (practically none).
+/// tuple per point or cell, a cell naming a missing point) or a time that is not finite; otherwise
+/// only from the in-memory writer (practically none).
 pub fn vtu_string(g: &Grid<'_>, format: VtuFormat) -> std::io::Result<String> {
     check_grid(g)?;
     let mut w = Writer::new_with_indent(Vec::new(), b' ', 1);
@@ -369,6 +372,14 @@ mod tests {
                 format,
             )
             .expect("xml");
+            let nan = Grid {
+                time: Some(f64::NAN),
+                ..g.clone()
+            };
+            assert!(
+                vtu_string(&nan, format).is_err(),
+                "a time that is not finite"
+            );
             let field = timed.find("<FieldData>").expect("field data");
             assert!(
                 field < timed.find("<Piece").expect("piece"),
