@@ -563,16 +563,22 @@ fn bad_contact_input_is_rejected_with_a_clear_message() {
     assert!(e.contains("inconsistently oriented"), "{e}");
 }
 
+/// The model of a block (`upper_solid`, held at its top) pressed by the rigid top face of the
+/// lower box, which has no body and is moved up by 0.01; `tail` follows `[[step]]`.
+fn rigid_tool(tail: &str) -> String {
+    format!(
+        "[[material]]\nname = \"m\"\ntype = \"linear_elastic\"\nE = 1000.0\nnu = 0.3\n[[body]]\ngroup = \"upper_solid\"\nmaterial = \"m\"\n[[boundary]]\ngroup = \"lower_zmax\"\ndisplacement = {{ x = 0.0, y = 0.0, z = 0.01 }}\n[[boundary]]\ngroup = \"upper_zmax\"\nfix = [\"x\", \"y\", \"z\"]\n{}[[step]]\n{tail}",
+        contact("multiplier", "")
+    )
+}
+
 #[test]
 fn block_pressed_by_a_rigid_tool_without_volume_elements() {
     // The lower box has no body: its top face is a rigid master, moved up by 0.01 against a
     // block held at its top. The tool's nodes are fully prescribed; the contact force balances the
     // block's reaction.
     let mesh = small_blocks(ElementKind::Tet4);
-    let text = format!(
-        "[[material]]\nname = \"m\"\ntype = \"linear_elastic\"\nE = 1000.0\nnu = 0.3\n[[body]]\ngroup = \"upper_solid\"\nmaterial = \"m\"\n[[boundary]]\ngroup = \"lower_zmax\"\ndisplacement = {{ x = 0.0, y = 0.0, z = 0.01 }}\n[[boundary]]\ngroup = \"upper_zmax\"\nfix = [\"x\", \"y\", \"z\"]\n{}[[step]]\nincrements = 2\n",
-        contact("multiplier", "")
-    );
+    let text = rigid_tool("increments = 2\n");
     let an = common::analysis(mesh, &text);
     let (terms, rec, _) = common::solve_contact(&an);
     let last = rec.last().expect("increments");
@@ -604,10 +610,7 @@ fn block_pressed_by_a_rigid_tool_without_volume_elements() {
 #[test]
 fn a_rigid_tools_faces_are_cells_of_the_vtu() {
     let mesh = small_blocks(ElementKind::Tet4);
-    let text = format!(
-        "[[material]]\nname = \"m\"\ntype = \"linear_elastic\"\nE = 1000.0\nnu = 0.3\n[[body]]\ngroup = \"upper_solid\"\nmaterial = \"m\"\n[[boundary]]\ngroup = \"lower_zmax\"\ndisplacement = {{ x = 0.0, y = 0.0, z = 0.01 }}\n[[boundary]]\ngroup = \"upper_zmax\"\nfix = [\"x\", \"y\", \"z\"]\n{}[[step]]\n[output]\nvtu_format = \"ascii\"\n",
-        contact("multiplier", "")
-    );
+    let text = rigid_tool("[output]\nvtu_format = \"ascii\"\n");
     let an = common::analysis(mesh, &text);
     let tool = an
         .mesh
