@@ -563,6 +563,18 @@ fn bad_contact_input_is_rejected_with_a_clear_message() {
     assert!(e.contains("inconsistently oriented"), "{e}");
 }
 
+/// Runs `an` writing its result files (stem `m`) into a fresh temporary folder named after
+/// `name`; returns the folder and the contact terms at the end.
+fn run_writing(an: &Analysis, name: &str) -> (std::path::PathBuf, ContactTerms) {
+    let dir = std::env::temp_dir().join(format!("tricontact-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut w = tricontact_fem::output::ResultWriter::new(an, &dir, "m").expect("writer");
+    let mut terms = ContactTerms::new(an);
+    tricontact_fem::driver::run(an, &mut terms, &mut |info| w.write(an, info)).expect("run");
+    w.finish(an).expect("finish");
+    (dir, terms)
+}
+
 /// The model of a block (`upper_solid`, held at its top) pressed by the rigid top face of the
 /// lower box, which has no body and is moved up by 0.01; `tail` follows `[[step]]`.
 fn rigid_tool(tail: &str) -> String {
@@ -620,12 +632,7 @@ fn a_rigid_tools_faces_are_cells_of_the_vtu() {
         .expect("tool group");
     let faces = tool.elements.len();
     assert!(faces > 0);
-    let dir = std::env::temp_dir().join(format!("tricontact-rigid-vtu-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    let mut w = tricontact_fem::output::ResultWriter::new(&an, &dir, "m").expect("writer");
-    let mut terms = ContactTerms::new(&an);
-    tricontact_fem::driver::run(&an, &mut terms, &mut |info| w.write(&an, info)).expect("run");
-    w.finish(&an).expect("finish");
+    let (dir, _) = run_writing(&an, "rigid-vtu");
     let vtu = std::fs::read_to_string(dir.join("m_001_0001.vtu")).expect("vtu");
     let cells = an.body.len() + faces;
     assert!(
@@ -665,12 +672,7 @@ fn contact_fields_and_history_columns_are_written() {
         contact("penalty", "")
     );
     let an = common::analysis(mesh, &text);
-    let dir = std::env::temp_dir().join(format!("tricontact-contact-out-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    let mut w = tricontact_fem::output::ResultWriter::new(&an, &dir, "m").expect("writer");
-    let mut terms = ContactTerms::new(&an);
-    tricontact_fem::driver::run(&an, &mut terms, &mut |info| w.write(&an, info)).expect("run");
-    w.finish(&an).expect("finish");
+    let (dir, terms) = run_writing(&an, "contact-out");
     let csv = std::fs::read_to_string(dir.join("history.csv")).expect("history");
     let header = csv.lines().next().expect("header");
     for col in ["_normal_force", "_active", "_max_penetration", "_area"] {
