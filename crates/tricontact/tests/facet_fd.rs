@@ -121,29 +121,20 @@ fn a_node_index_past_two_panics() {
         Vec3::new(0.0, 1.0, 0.0),
     )
     .expect("a facet");
-    let calls: [(&str, &dyn Fn(usize)); 6] = [
-        ("opposite_edge", &|a| {
-            let _ = f.opposite_edge(a);
-        }),
-        ("inner_edge_normal", &|a| {
-            let _ = f.inner_edge_normal(a);
-        }),
-        ("shape_gradient", &|a| {
-            let _ = f.shape_gradient(a);
-        }),
-        ("d_area_normal", &|a| {
-            let _ = f.d_area_normal(a);
-        }),
-        ("d_normal", &|a| {
-            let _ = f.d_normal(a);
-        }),
-        ("d_triad", &|a| {
-            let _ = f.d_triad(a);
-        }),
-    ];
-    for (name, call) in calls {
-        call(2);
-        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| call(3)));
-        assert!(outcome.is_err(), "{name}(3) returned");
+    // Each query answers for node 2 and panics for node 3.
+    macro_rules! check {
+        ($($query:ident),*) => {$(
+            let _ = f.$query(2);
+            let outcome = std::panic::catch_unwind(|| f.$query(3));
+            assert!(outcome.is_err(), "{}(3) returned", stringify!($query));
+        )*};
     }
+    check!(
+        opposite_edge,
+        inner_edge_normal,
+        shape_gradient,
+        d_area_normal,
+        d_normal,
+        d_triad
+    );
 }
