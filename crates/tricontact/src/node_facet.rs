@@ -275,13 +275,25 @@ impl NodeFacet {
 
     /// `∇_b N_a = −N_b G_a + P (G_a·G_b) W` for `a ∈ {i, j, k}` and `b ∈ {i, j, k, l}` (see the
     /// module doc).
-    #[must_use]
-    pub fn shape_gradients(&self) -> [[Vec3; 4]; 3] {
+    ///
+    /// # Errors
+    /// [`GeometryError::Overflow`] if an entry overflows (a gap `P` so large against the facet's
+    /// size that `P |G_a|²` is beyond the range of `f64`, as in [`NodeFacet::gap_hessian`]).
+    pub fn shape_gradients(&self) -> Result<[[Vec3; 4]; 3], GeometryError> {
         let shape = self.shape4();
         let g = self.in_plane_gradients();
         let normal = self.facet.normal();
-        std::array::from_fn(|a| {
+        let out: [[Vec3; 4]; 3] = std::array::from_fn(|a| {
             std::array::from_fn(|b| -shape[b] * g[a] + self.gap() * g[a].dot(&g[b]) * normal)
-        })
+        });
+        if out
+            .iter()
+            .flatten()
+            .all(|v| v.iter().all(|c| c.is_finite()))
+        {
+            Ok(out)
+        } else {
+            Err(GeometryError::Overflow)
+        }
     }
 }

@@ -10,6 +10,33 @@ fn v(x: f64, y: f64, z: f64) -> Vec3 {
     Vec3::new(x, y, z)
 }
 
+/// A slave node so far from a tiny facet that `P |G_a|²` overflows: the pair exists (its gap and
+/// shape functions are finite), and its shape-function gradients are an `Overflow`, as its
+/// Hessian is, not NaN and infinities.
+#[test]
+fn shape_gradients_that_overflow_are_an_error() {
+    let s = 1e-5;
+    let pair = NodeFacet::new(
+        v(0.0, 0.0, 0.0),
+        v(s, 0.0, 0.0),
+        v(0.0, s, 0.0),
+        v(0.3 * s, 0.3 * s, 1e299),
+    )
+    .expect("a pair with a finite gap");
+    assert!(pair.gap().is_finite());
+    assert_eq!(pair.shape_gradients().err(), Some(GeometryError::Overflow));
+    assert_eq!(pair.gap_hessian().err(), Some(GeometryError::Overflow));
+    // At a sane distance, finite.
+    let near = NodeFacet::new(
+        v(0.0, 0.0, 0.0),
+        v(s, 0.0, 0.0),
+        v(0.0, s, 0.0),
+        v(0.3 * s, 0.3 * s, s),
+    )
+    .expect("a pair");
+    assert!(near.shape_gradients().is_ok());
+}
+
 #[test]
 fn coincident_and_collinear_facets_are_errors() {
     let o = v(1.0, 2.0, 3.0);
@@ -106,6 +133,9 @@ proptest! {
             prop_assert!(finite(pair.gap_gradient().iter().copied()));
             if let Ok(h) = pair.gap_hessian() {
                 prop_assert!(finite(h.iter().copied()));
+            }
+            if let Ok(g) = pair.shape_gradients() {
+                prop_assert!(finite(g.iter().flatten().flat_map(|v| v.iter().copied())));
             }
             if let Ok(t) = penalty(&pair, alpha) {
                 prop_assert!(finite(t.force.iter().chain(t.stiffness.iter()).copied()));
