@@ -90,7 +90,7 @@ impl Facet {
             .max(eik.norm_squared())
             .max(ejk.norm_squared());
         if !(w_norm.is_finite() && longest.is_finite()) {
-            return Err(if (xi + xj + xk).iter().all(|c| c.is_finite()) {
+            return Err(if [xi, xj, xk].iter().flatten().all(|c| c.is_finite()) {
                 GeometryError::Overflow
             } else {
                 GeometryError::NonFinite

@@ -37,6 +37,31 @@ fn shape_gradients_that_overflow_are_an_error() {
     assert!(near.shape_gradients().is_ok());
 }
 
+/// Finite coordinates whose sums or squares overflow are an `Overflow`, not `NonFinite` (which
+/// is for NaN or infinite input).
+#[test]
+fn finite_input_that_overflows_is_an_overflow() {
+    let big = 1e308;
+    let e = Facet::new(v(big, 0.0, 0.0), v(big, 1e200, 0.0), v(big, 0.0, 1e200)).err();
+    assert_eq!(e, Some(GeometryError::Overflow));
+    let e = point_vertex(&v(1e200, 0.0, 0.0), &v(-1e200, 0.0, 0.0)).err();
+    assert_eq!(e, Some(GeometryError::Overflow));
+    let e = point_edge(&v(-1e200, 0.0, 0.0), &v(1e200, 0.0, 0.0), &v(0.0, 1.0, 0.0)).err();
+    assert_eq!(e, Some(GeometryError::Overflow));
+    // NaN or infinite input stays `NonFinite`.
+    let e = point_vertex(&v(f64::NAN, 0.0, 0.0), &v(1.0, 0.0, 0.0)).err();
+    assert_eq!(e, Some(GeometryError::NonFinite));
+    let e = point_edge(
+        &v(0.0, 0.0, 0.0),
+        &v(f64::INFINITY, 0.0, 0.0),
+        &v(0.0, 1.0, 0.0),
+    )
+    .err();
+    assert_eq!(e, Some(GeometryError::NonFinite));
+    let e = Facet::new(v(0.0, 0.0, 0.0), v(1.0, 0.0, 0.0), v(0.0, f64::NAN, 0.0)).err();
+    assert_eq!(e, Some(GeometryError::NonFinite));
+}
+
 #[test]
 fn coincident_and_collinear_facets_are_errors() {
     let o = v(1.0, 2.0, 3.0);

@@ -48,13 +48,20 @@ pub struct PointEdge {
 /// # Errors
 /// [`GeometryError::NonFinite`] for non-finite input; [`GeometryError::DegenerateEdge`] when the
 /// edge ends coincide; [`GeometryError::ZeroDistance`] when the node lies on the line;
-/// [`GeometryError::Overflow`] for coordinates of wildly different magnitudes.
+/// [`GeometryError::Overflow`] for finite coordinates whose differences or squares overflow, or of
+/// wildly different magnitudes.
 pub fn point_edge(xa: &Vec3, xb: &Vec3, xl: &Vec3) -> Result<PointEdge, GeometryError> {
     let e = xb - xa;
     let r = xl - xa;
     let e2 = e.norm_squared();
     if !(e2.is_finite() && r.norm_squared().is_finite()) {
-        return Err(GeometryError::NonFinite);
+        return Err(
+            if [xa, xb, xl].into_iter().flatten().all(|c| c.is_finite()) {
+                GeometryError::Overflow
+            } else {
+                GeometryError::NonFinite
+            },
+        );
     }
     let scale2 = xa.norm_squared().max(xb.norm_squared());
     if e2 <= 1e-24 * scale2 || !e2.is_normal() {

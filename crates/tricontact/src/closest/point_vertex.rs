@@ -34,12 +34,17 @@ pub struct PointVertex {
 ///
 /// # Errors
 /// [`GeometryError::NonFinite`] for non-finite input; [`GeometryError::ZeroDistance`] when the node
-/// sits on the vertex; [`GeometryError::Overflow`] for coordinates of wildly different magnitudes.
+/// sits on the vertex; [`GeometryError::Overflow`] for finite coordinates whose difference
+/// overflows, or of wildly different magnitudes.
 pub fn point_vertex(xa: &Vec3, xl: &Vec3) -> Result<PointVertex, GeometryError> {
     let r = xl - xa;
     let distance = r.norm();
     if !distance.is_finite() {
-        return Err(GeometryError::NonFinite);
+        return Err(if [xa, xl].into_iter().flatten().all(|c| c.is_finite()) {
+            GeometryError::Overflow
+        } else {
+            GeometryError::NonFinite
+        });
     }
     let scale = xa.norm().max(xl.norm()).max(f64::MIN_POSITIVE.sqrt());
     if distance <= 1e-12 * scale {
