@@ -6,7 +6,9 @@ mod common;
 use common::{CASES, REL_STEP, TOL, facet_size, fd_gradient, fd_jacobian, node, pair, rel_err};
 use nalgebra::SVector;
 use proptest::prelude::*;
-use tricontact::closest::{closest_point_and_distance_squared, distance_squared_to_triangle};
+use tricontact::closest::{
+    closest_point_and_distance_squared, closest_point_on_triangle, distance_squared_to_triangle,
+};
 use tricontact::{Facet, Feature, Vec3, Vec12, closest_point, point_edge, point_vertex};
 
 type Vec6 = SVector<f64, 6>;
@@ -223,4 +225,39 @@ fn thin_facets_have_accurate_closest_points() {
     }
     assert!(cases > 15_000, "{cases} facets accepted");
     println!("thin facets: {cases} cases, worst distance error {worst:.1} ε / sine of the size");
+}
+
+/// A triangle so small that products of four of its lengths underflow to zero (sizes below about
+/// 10⁻⁷⁸, which the search refuses as facets) still gets the right feature and closest point: the
+/// kernel measures it scaled to unit size. At every scale the feature and barycentric coordinates
+/// are the unit triangle's, and the distance too while its square is a normal number.
+#[test]
+fn tiny_triangles_have_the_unit_triangles_closest_point() {
+    let unit = [
+        Vec3::zeros(),
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+    ];
+    for p in [
+        Vec3::new(0.2, 0.3, 0.1),
+        Vec3::new(0.6, 0.6, -0.2),
+        Vec3::new(-0.5, 0.5, 0.0),
+    ] {
+        let reference = closest_point_on_triangle(&unit[0], &unit[1], &unit[2], &p);
+        for s in [1e-60, 1e-80, 1e-100, 1e-150, 1e-200, 1e-280] {
+            let [a, b, c] = unit.map(|x| x * s);
+            let cp = closest_point_on_triangle(&a, &b, &c, &(p * s));
+            assert_eq!(cp.feature, reference.feature, "scale {s:e}, {p:?}");
+            for (n, m) in cp.barycentric.iter().zip(reference.barycentric) {
+                assert!((n - m).abs() < 1e-12, "scale {s:e}: {:?}", cp.barycentric);
+            }
+            if (s * s).is_normal() {
+                let d = distance_squared_to_triangle(&a, &b, &c, &(p * s)).sqrt();
+                assert!(
+                    (d / s - reference.distance).abs() < 1e-12,
+                    "scale {s:e}: {d:e}"
+                );
+            }
+        }
+    }
 }

@@ -106,13 +106,23 @@ pub fn closest_point_and_distance_squared(
 ///
 /// The region tests use products of four lengths, which overflow (or underflow to `0/0`) for
 /// extreme coordinates; the barycentric coordinates are invariant under scaling, so such a case is
-/// recomputed on the relative vectors scaled to unit size.
+/// recomputed on the relative vectors scaled to unit size. A triangle smaller than [`TINY`] is
+/// always measured so: its products can underflow to zero, a finite but wrong answer (the search
+/// never measures such a facet: [`Facet::new`] refuses it, so the lanes need no such test).
 #[inline]
 fn region(a: &Vec3, b: &Vec3, c: &Vec3, p: &Vec3) -> (Feature, [f64; 3]) {
     let (ab, ac, ap) = (b - a, c - a, p - a);
-    let r = region_relative(&ab, &ac, &ap);
-    if r.1.iter().all(|v| v.is_finite()) {
-        return r;
+    let size = ab.amax().max(ac.amax());
+    if size < TINY && size > 0.0 {
+        let r = region_relative(&(ab / size), &(ac / size), &(ap / size));
+        if r.1.iter().all(|v| v.is_finite()) {
+            return r;
+        }
+    } else {
+        let r = region_relative(&ab, &ac, &ap);
+        if r.1.iter().all(|v| v.is_finite()) {
+            return r;
+        }
     }
     let scale = ab.amax().max(ac.amax()).max(ap.amax());
     if !(scale.is_finite() && scale > 0.0) {
@@ -126,6 +136,11 @@ fn region(a: &Vec3, b: &Vec3, c: &Vec3, p: &Vec3) -> (Feature, [f64; 3]) {
         (Feature::Vertex(0), [1.0, 0.0, 0.0])
     }
 }
+
+/// Largest edge component below which a triangle is measured scaled to unit size ([`region`]):
+/// below the smallest facet [`Facet::new`] accepts (`|w|²` a normal number needs edges of about
+/// 10⁻⁷⁷ or more).
+const TINY: f64 = 1e-78;
 
 /// [`region`] on `ab = b − a`, `ac = c − a`, `ap = p − a`.
 #[inline]

@@ -51,6 +51,11 @@ use crate::closest::{
 };
 use crate::linalg::Vec3;
 
+/// Squared edge length below which a lane is measured by the scalar kernel: `(10⁻⁷⁰)²`, above the
+/// scalar kernel's own threshold for tiny triangles (10⁻⁷⁸ per component) and below any facet
+/// [`crate::Facet::new`] accepts (about 10⁻⁷⁷).
+const TINY_SQUARED: f64 = 1e-140;
+
 /// One quantity of every lane: the facets of a group, or the pairs of [`closest_pairs`].
 pub(crate) type V = Vector;
 
@@ -146,7 +151,11 @@ pub(crate) fn region(a: &[V; 3], b: &[V; 3], c: &[V; 3], pl: &[V; 3]) -> Region 
     let (ab2, ac2, abac) = (d1 - d3, d2 - d6, d2 - d4);
     let lengths = ab2 * ac2;
     let thin = !(lengths - abac * abac).simd_ge(V::splat(THIN) * lengths);
-    let bad = (thin | !(n[0].is_finite() & n[1].is_finite() & n[2].is_finite())).to_bitmask();
+    // A facet far below any the search accepts goes to the scalar kernel too, which measures the
+    // tiniest scaled to unit size (`closest::point_triangle`): this bound is above its.
+    let tiny = ab2.fast_max(ac2).simd_lt(V::splat(TINY_SQUARED));
+    let finite = n[0].is_finite() & n[1].is_finite() & n[2].is_finite();
+    let bad = (thin | tiny | !finite).to_bitmask();
     Region {
         n,
         point,
