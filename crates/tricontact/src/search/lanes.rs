@@ -12,7 +12,8 @@
 //! the tree compares exactly the numbers the brute-force search compares. A lane whose selected
 //! coordinates are not finite (extreme coordinates, where the scalar kernel rescales), or whose
 //! facet is thin (`closest::point_triangle::is_thin`, by the same operations: the scalar kernel
-//! then takes the sub-areas from the facet's normal), is recomputed with the scalar kernel. One
+//! then takes the sub-areas from the facet's normal) or far smaller than any facet the tree holds
+//! (edges below 10⁻⁷⁰, where the scalar kernel rescales), is recomputed with the scalar kernel. One
 //! body ([`region`]) serves both uses.
 //!
 //! # Lane width
