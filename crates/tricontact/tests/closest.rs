@@ -228,9 +228,10 @@ fn thin_facets_have_accurate_closest_points() {
 }
 
 /// A triangle so small that products of four of its lengths underflow to zero (sizes below about
-/// 10⁻⁷⁸, which the search refuses as facets) still gets the right feature and closest point: the
-/// kernel measures it scaled to unit size. At every scale the feature and barycentric coordinates
-/// are the unit triangle's, and the distance too while its square is a normal number.
+/// 10⁻⁷⁸, which [`Facet::new`] refuses) still gets the right feature and closest point from
+/// `closest_point_on_triangle`, which measures it scaled to unit size. At every scale the feature
+/// and barycentric coordinates are the unit triangle's, and the distance too while its square is
+/// a normal number.
 #[test]
 fn tiny_triangles_have_the_unit_triangles_closest_point() {
     let unit = [
@@ -252,7 +253,7 @@ fn tiny_triangles_have_the_unit_triangles_closest_point() {
                 assert!((n - m).abs() < 1e-12, "scale {s:e}: {:?}", cp.barycentric);
             }
             if (s * s).is_normal() {
-                let d = distance_squared_to_triangle(&a, &b, &c, &(p * s)).sqrt();
+                let d = cp.distance;
                 assert!(
                     (d / s - reference.distance).abs() < 1e-12,
                     "scale {s:e}: {d:e}"

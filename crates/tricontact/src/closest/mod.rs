@@ -10,7 +10,7 @@ pub mod point_vertex;
 
 pub use point_edge::{PointEdge, point_edge};
 pub use point_triangle::{
-    ClosestPoint, Feature, closest_point, closest_point_and_distance_squared,
+    ClosestPoint, Feature, TINY, closest_point, closest_point_and_distance_squared,
     closest_point_on_triangle, distance_squared_to_triangle,
 };
 pub use point_vertex::{PointVertex, point_vertex};

@@ -69,19 +69,41 @@ pub fn closest_point(facet: &Facet, p: &Vec3) -> ClosestPoint {
 }
 
 /// The closest point of the triangle `(a, b, c)` to node `p`, with its feature, without building a
-/// [`Facet`]: the form the contact search calls on every candidate. For a degenerate triangle (two
-/// corners coinciding, or all three on a line) the result is finite but need not be the closest
-/// point of the segment or point it collapses to; [`Facet::new`] refuses such triangles and the
-/// search skips them (with a report) before it gets here.
+/// [`Facet`]. For a degenerate triangle (two corners coinciding, or all three on a line) the result
+/// is finite but need not be the closest point of the segment or point it collapses to;
+/// [`Facet::new`] refuses such triangles and the search skips them (with a report). A triangle
+/// whose edges are all below [`TINY`] (which [`Facet::new`] refuses too) is measured scaled to
+/// unit size: products of four of its lengths would underflow to zero and pick a wrong region.
 #[must_use]
 #[inline]
 pub fn closest_point_on_triangle(a: &Vec3, b: &Vec3, c: &Vec3, p: &Vec3) -> ClosestPoint {
+    let (ab, ac) = (b - a, c - a);
+    let size = ab.amax().max(ac.amax());
+    if size < TINY && size > 0.0 {
+        let (feature, barycentric) = region_relative(&(ab / size), &(ac / size), &((p - a) / size));
+        if barycentric.iter().all(|v| v.is_finite()) {
+            let point = a * barycentric[0] + b * barycentric[1] + c * barycentric[2];
+            return ClosestPoint {
+                feature,
+                barycentric,
+                point,
+                distance: (p - point).norm(),
+            };
+        }
+    }
     closest_point_and_distance_squared(a, b, c, p).0
 }
 
+/// Largest edge component below which [`closest_point_on_triangle`] measures a triangle scaled to
+/// unit size: below the smallest facet [`Facet::new`] accepts (`|w|²` a normal number needs edges
+/// of about 10⁻⁷⁷ or more), so the search's kernel ([`closest_point_and_distance_squared`],
+/// [`distance_squared_to_triangle`], bit for bit the lanes') never meets such a triangle.
+pub const TINY: f64 = 1e-78;
+
 /// [`closest_point_on_triangle`] and the squared distance, bit for bit the value of
 /// [`distance_squared_to_triangle`] (the closest point's `distance` is its square root), from one
-/// Voronoi-region computation.
+/// Voronoi-region computation: the search's kernel. A triangle below [`TINY`], which the search
+/// never holds, is not rescaled here (see [`closest_point_on_triangle`]).
 #[must_use]
 #[inline]
 pub fn closest_point_and_distance_squared(
@@ -106,23 +128,13 @@ pub fn closest_point_and_distance_squared(
 ///
 /// The region tests use products of four lengths, which overflow (or underflow to `0/0`) for
 /// extreme coordinates; the barycentric coordinates are invariant under scaling, so such a case is
-/// recomputed on the relative vectors scaled to unit size. A triangle smaller than [`TINY`] is
-/// always measured so: its products can underflow to zero, a finite but wrong answer (the search
-/// never measures such a facet: [`Facet::new`] refuses it, so the lanes need no such test).
+/// recomputed on the relative vectors scaled to unit size.
 #[inline]
 fn region(a: &Vec3, b: &Vec3, c: &Vec3, p: &Vec3) -> (Feature, [f64; 3]) {
     let (ab, ac, ap) = (b - a, c - a, p - a);
-    let size = ab.amax().max(ac.amax());
-    if size < TINY && size > 0.0 {
-        let r = region_relative(&(ab / size), &(ac / size), &(ap / size));
-        if r.1.iter().all(|v| v.is_finite()) {
-            return r;
-        }
-    } else {
-        let r = region_relative(&ab, &ac, &ap);
-        if r.1.iter().all(|v| v.is_finite()) {
-            return r;
-        }
+    let r = region_relative(&ab, &ac, &ap);
+    if r.1.iter().all(|v| v.is_finite()) {
+        return r;
     }
     let scale = ab.amax().max(ac.amax()).max(ap.amax());
     if !(scale.is_finite() && scale > 0.0) {
@@ -136,11 +148,6 @@ fn region(a: &Vec3, b: &Vec3, c: &Vec3, p: &Vec3) -> (Feature, [f64; 3]) {
         (Feature::Vertex(0), [1.0, 0.0, 0.0])
     }
 }
-
-/// Largest edge component below which a triangle is measured scaled to unit size ([`region`]):
-/// below the smallest facet [`Facet::new`] accepts (`|w|²` a normal number needs edges of about
-/// 10⁻⁷⁷ or more).
-const TINY: f64 = 1e-78;
 
 /// [`region`] on `ab = b − a`, `ac = c − a`, `ap = p − a`.
 #[inline]

@@ -12,8 +12,7 @@
 //! the tree compares exactly the numbers the brute-force search compares. A lane whose selected
 //! coordinates are not finite (extreme coordinates, where the scalar kernel rescales), or whose
 //! facet is thin (`closest::point_triangle::is_thin`, by the same operations: the scalar kernel
-//! then takes the sub-areas from the facet's normal) or far smaller than any facet the tree holds
-//! (edges below 10⁻⁷⁰, where the scalar kernel rescales), is recomputed with the scalar kernel. One
+//! then takes the sub-areas from the facet's normal), is recomputed with the scalar kernel. One
 //! body ([`region`]) serves both uses.
 //!
 //! # Lane width
@@ -51,11 +50,6 @@ use crate::closest::{
     distance_squared_to_triangle,
 };
 use crate::linalg::Vec3;
-
-/// Squared edge length below which a lane is measured by the scalar kernel: `(10⁻⁷⁰)²`, above the
-/// scalar kernel's own threshold for tiny triangles (10⁻⁷⁸ per component) and below any facet
-/// [`crate::Facet::new`] accepts (about 10⁻⁷⁷).
-const TINY_SQUARED: f64 = 1e-140;
 
 /// One quantity of every lane: the facets of a group, or the pairs of [`closest_pairs`].
 pub(crate) type V = Vector;
@@ -152,11 +146,7 @@ pub(crate) fn region(a: &[V; 3], b: &[V; 3], c: &[V; 3], pl: &[V; 3]) -> Region 
     let (ab2, ac2, abac) = (d1 - d3, d2 - d6, d2 - d4);
     let lengths = ab2 * ac2;
     let thin = !(lengths - abac * abac).simd_ge(V::splat(THIN) * lengths);
-    // A facet far below any the search accepts goes to the scalar kernel too, which measures the
-    // tiniest scaled to unit size (`closest::point_triangle`): this bound is above its.
-    let tiny = ab2.fast_max(ac2).simd_lt(V::splat(TINY_SQUARED));
-    let finite = n[0].is_finite() & n[1].is_finite() & n[2].is_finite();
-    let bad = (thin | tiny | !finite).to_bitmask();
+    let bad = (thin | !(n[0].is_finite() & n[1].is_finite() & n[2].is_finite())).to_bitmask();
     Region {
         n,
         point,
@@ -324,7 +314,9 @@ pub(crate) struct Winner {
 
 impl Winner {
     /// The closest point on the winning facet, whose corners are `corners`: bit for bit
-    /// [`closest_point_on_triangle`]'s, from the lanes' coordinates where they hold.
+    /// [`closest_point_on_triangle`]'s, from the lanes' coordinates where they hold (those of
+    /// [`closest_point_and_distance_squared`], which differ only for a triangle below
+    /// [`crate::closest::TINY`], which no tree holds).
     #[inline]
     pub(crate) fn closest(&self, [a, b, c]: &[Vec3; 3], p: &Vec3) -> ClosestPoint {
         let Some(&feature) = FEATURES.get(usize::from(self.feature)) else {
@@ -646,10 +638,14 @@ mod tests {
             );
             assert_eq!(w.leaf, Some(3));
             let [a, b, c] = &corners[k];
-            let (got, want) = (
-                w.closest(&corners[k], p),
-                closest_point_on_triangle(a, b, c, p),
-            );
+            // The lanes' coordinates are the kernel's; a lane the scalar kernel measured is
+            // finished by `closest_point_on_triangle` (the two differ below `TINY` alone).
+            let want = if FEATURES.get(usize::from(w.feature)).is_some() {
+                closest_point_and_distance_squared(a, b, c, p).0
+            } else {
+                closest_point_on_triangle(a, b, c, p)
+            };
+            let got = w.closest(&corners[k], p);
             assert_eq!(got.feature, want.feature);
             assert_eq!(got.distance.to_bits(), want.distance.to_bits());
             for d in 0..3 {
