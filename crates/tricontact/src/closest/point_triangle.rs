@@ -96,8 +96,9 @@ pub fn closest_point_on_triangle(a: &Vec3, b: &Vec3, c: &Vec3, p: &Vec3) -> Clos
 
 /// Largest edge component below which [`closest_point_on_triangle`] measures a triangle scaled to
 /// unit size: below the smallest facet [`Facet::new`] accepts (`|w|²` a normal number needs edges
-/// of about 10⁻⁷⁷ or more), so the search's kernel ([`closest_point_and_distance_squared`],
-/// [`distance_squared_to_triangle`], bit for bit the lanes') never meets such a triangle.
+/// of about 10⁻⁷⁷ or more), so no search tree holds such a triangle and the search's kernel
+/// ([`closest_point_and_distance_squared`], [`distance_squared_to_triangle`], bit for bit the
+/// lanes') needs no such case.
 pub const TINY: f64 = 1e-78;
 
 /// [`closest_point_on_triangle`] and the squared distance, bit for bit the value of
