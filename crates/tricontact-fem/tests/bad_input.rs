@@ -801,7 +801,10 @@ fn a_malformed_mesh_line_is_named_by_its_number() {
         let e = gmsh::parse_msh(bad.as_bytes(), Path::new("l.msh")).expect_err(to);
         let msg = e.to_string();
         assert!(matches!(e, FemError::Mesh { .. }), "{msg}");
-        assert!(msg.contains(&format!("line {line}")), "{to}: {msg}");
+        assert!(
+            msg.contains(&format!("reading stopped at line {line}: ")),
+            "{to}: {msg}"
+        );
         assert!(!msg.contains('\n'), "one line: {msg}");
     }
 }
