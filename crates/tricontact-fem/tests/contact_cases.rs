@@ -848,26 +848,32 @@ fn a_degenerate_master_face_is_named_by_its_tags() {
     let folder =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/contact-block");
     let model = Model::load(&folder.join("model.toml")).expect("model");
-    let mut mesh = tricontact_fem::gmsh::read_msh(&model.mesh_path()).expect("mesh");
+    let mesh = tricontact_fem::gmsh::read_msh(&model.mesh_path()).expect("mesh");
     let text = std::fs::read_to_string(folder.join("model.toml")).expect("text");
     let line_of = |key: &str| 1 + text.lines().position(|l| l.starts_with(key)).expect(key);
     let at = |key: &str| format!("{}:{}: ", folder.join("model.toml").display(), line_of(key));
-    let mut degenerate = mesh.clone();
-    let face = degenerate
+    // Face `element` of the mesh with its last node made its third: the message of `model`.
+    let degenerate = |model: &Model, element: usize| {
+        let mut mesh = mesh.clone();
+        let face = &mut mesh.elements[element];
+        face.nodes[3] = face.nodes[2];
+        let (tag, node) = (face.tag, mesh.node_tags[face.nodes[2]]);
+        let msg = Analysis::new(model, mesh)
+            .expect_err("degenerate")
+            .to_string();
+        (
+            msg,
+            format!("contact 'block_bottom-base_top': face {tag} repeats node {node}"),
+        )
+    };
+    let master = mesh
         .elements
-        .iter_mut()
-        .find(|e| e.tag == 65)
+        .iter()
+        .position(|e| e.tag == 65)
         .expect("face 65");
-    face.nodes[3] = face.nodes[2];
-    let node = degenerate.node_tags[face.nodes[2]];
-    let msg = Analysis::new(&model, degenerate)
-        .expect_err("degenerate")
-        .to_string();
+    let (msg, expect) = degenerate(&model, master);
     assert!(
-        msg.contains(&format!(
-            "{}contact 'block_bottom-base_top': face 65 repeats node {node}",
-            at("master =")
-        )),
+        msg.contains(&format!("{}{expect}", at("master ="))),
         "{msg}"
     );
     // A degenerate slave face, which two passes make a master of, at the pair's `slave`.
@@ -875,20 +881,8 @@ fn a_degenerate_master_face_is_named_by_its_tags() {
     two.contacts[0].two_pass = true;
     two.contacts[0].method = tricontact_fem::model::ContactMethod::Penalty;
     let slave = mesh.group("block_bottom").expect("slave").elements[0];
-    let tag = mesh.elements[slave].tag;
-    let face = &mut mesh.elements[slave];
-    face.nodes[3] = face.nodes[2];
-    let node = mesh.node_tags[face.nodes[2]];
-    let msg = Analysis::new(&two, mesh)
-        .expect_err("degenerate slave")
-        .to_string();
-    assert!(
-        msg.contains(&format!(
-            "{}contact 'block_bottom-base_top': face {tag} repeats node {node}",
-            at("slave =")
-        )),
-        "{msg}"
-    );
+    let (msg, expect) = degenerate(&two, slave);
+    assert!(msg.contains(&format!("{}{expect}", at("slave ="))), "{msg}");
 }
 
 /// A master surface split into two contacts with the same slave surface, with multipliers: the

@@ -214,6 +214,24 @@ fn edge_lengths(mesh: &Mesh, facets: &[[u32; 3]]) -> (f64, f64) {
     (sum / n.max(1) as f64, max)
 }
 
+/// The search surface of `facets` (of the faces `face_tags`), or its error in the mesh's terms (a
+/// facet by the Gmsh tag of its face, a node by its tag) after `place`, the model line of the key
+/// that names the surface.
+fn search_surface(
+    name: &str,
+    facets: Vec<[u32; 3]>,
+    face_tags: &[u64],
+    mesh: &Mesh,
+    place: &str,
+) -> Result<Surface, Vec<String>> {
+    Surface::new(facets, mesh.nodes.len()).map_err(|e| {
+        vec![format!(
+            "{place}{}",
+            surface_error(name, &e, face_tags, mesh)
+        )]
+    })
+}
+
 /// A surface error in the mesh's terms: a facet by the Gmsh tag of its face, a node by its tag.
 fn surface_error(
     name: &str,
@@ -449,13 +467,7 @@ pub fn resolve(
     if !problems.is_empty() {
         return Err(problems);
     }
-    let surface = Surface::new(m_facets, mesh.nodes.len()).map_err(|e| {
-        vec![format!(
-            "{}{}",
-            at("master"),
-            surface_error(&name, &e, &m_tags, mesh)
-        )]
-    })?;
+    let surface = search_surface(&name, m_facets, &m_tags, mesh, &at("master"))?;
     let mut report = Vec::new();
     // Initial penetrations and adjust.
     {
@@ -553,13 +565,7 @@ pub fn resolve(
             .map(|a| m_proxies.get(a).cloned().unwrap_or_default())
             .collect();
         let (_, s_max) = edge_lengths(mesh, &s_facets);
-        let surface = Surface::new(s_facets, mesh.nodes.len()).map_err(|e| {
-            vec![format!(
-                "{}{}",
-                at("slave"),
-                surface_error(&name, &e, &s_tags, mesh)
-            )]
-        })?;
+        let surface = search_surface(&name, s_facets, &s_tags, mesh, &at("slave"))?;
         passes.push(Pass {
             slaves: m_nodes,
             areas,
