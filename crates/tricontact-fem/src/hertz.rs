@@ -291,10 +291,10 @@ impl HertzSetup {
         // Taken from the slave body, it is not > 0 only when that body's material is invalid
         // (a problem of its own): say so rather than quote a modulus the user never gave.
         if def.modulus.is_none() && modulus.is_some_and(|m| !positive(m)) {
-            problems.push(format!(
-                "{}[hertz] modulus: taken from the slave body's material, which is invalid; fix the material or give `modulus`",
-                at("modulus")
-            ));
+            problem(
+                "modulus",
+                "modulus: taken from the slave body's material, which is invalid; fix the material or give `modulus`".into(),
+            );
         }
         let (Some(pair), Some(group), Some(modulus), true) =
             (pair, group, modulus, problems.is_empty())
