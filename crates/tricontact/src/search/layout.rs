@@ -33,8 +33,16 @@
 //! 57 ns per facet at 10⁶), and leaves of up to six were slower to query than either: eight
 //! everywhere. With four facets per leaf, splitting ranges of five to eight facets after their
 //! first four instead of at a Morton bit filled leaves to 3.1 and made coherent queries 1–2 %
-//! faster, within run-to-run noise. The top levels are split in parallel (`rayon::join`), each
-//! half into its own list, joined with shifted indices.
+//! faster, within run-to-run noise. With the leaves cut by `search::leaves` (a later session, the
+//! same Zen 3 machine), leaves of up to four answered 7–10 % faster at 10⁵ facets (441–456 vs
+//! 476–500 ns, five interleaved rounds of `search_loop closest 316 15`) and 1–11 % at 10⁶ (487–524
+//! vs 510–550 ns), but refit 5–30 % slower (68–86 vs 63–68 ns per facet) and built no faster
+//! (191–241 vs 197–225 ns per facet on two threads); in two interleaved runs of `search_bench` the
+//! build at 10⁶ read 5.02 and 4.39 M facets/s against 5.49 and 5.05, below its target of 5 in one
+//! run, and the coherent figure at 10⁶ did not separate them (1.85 and 1.90 vs 1.89 and 1.53 M/s
+//! per core). A gain of that size does not reach the coherent target on that machine and would
+//! cost the build its margin: eight stayed. The top levels are split in parallel
+//! (`rayon::join`), each half into its own list, joined with shifted indices.
 //!
 //! # Collapse
 //! Every internal node of the binary tree takes its children's children: up to four children per
