@@ -23,6 +23,21 @@ use crate::element::{Inverted, internal_force};
 /// Marker for a DOF without an equation.
 pub const NO_EQ: usize = usize::MAX;
 
+/// A result field over all mesh nodes, from [`ExtraTerms::point_fields`] (written as `.vtu`
+/// point data).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointField {
+    /// Array name.
+    pub name: String,
+    /// Components per node.
+    pub components: usize,
+    /// Values, node-major.
+    pub values: Vec<f64>,
+    /// The values are integers naming something (a status, a tag): written as `Int64` (see
+    /// [`crate::vtu::Field::integer`]).
+    pub integer: bool,
+}
+
 /// Contributions from outside the element loop (contact, springs, …), with
 /// their own state.
 ///
@@ -117,9 +132,8 @@ pub trait ExtraTerms: Send {
     fn commit(&mut self) {}
     /// The increment attempt failed: back to the committed state.
     fn restore(&mut self) {}
-    /// Point fields for the result files at the committed state:
-    /// `(name, components, values over all nodes)`.
-    fn point_fields(&self) -> Vec<(String, usize, Vec<f64>)> {
+    /// Point fields for the result files at the committed state (values over all nodes).
+    fn point_fields(&self) -> Vec<PointField> {
         Vec::new()
     }
     /// History columns at the committed state: `(name, value)`, same names

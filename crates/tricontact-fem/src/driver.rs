@@ -26,7 +26,7 @@
 //! `u_n`, as with `none`.
 
 use crate::analysis::{Analysis, Load};
-use crate::assembly::{DofMap, ExtraTerms, Pattern, node_adjacency};
+use crate::assembly::{DofMap, ExtraTerms, Pattern, PointField, node_adjacency};
 use crate::error::{FemError, Result};
 use crate::linsolve::LinearSolver;
 use crate::model::Extrapolation;
@@ -69,7 +69,7 @@ pub struct IncrementInfo<'a> {
     pub notes: &'a [String],
     /// Extra point fields at the committed state (see
     /// [`ExtraTerms::point_fields`]).
-    pub point_fields: &'a [(String, usize, Vec<f64>)],
+    pub point_fields: &'a [PointField],
     /// Extra history columns at the committed state.
     pub history: &'a [(String, f64)],
     /// The attempts cut back before this increment converged: target load factor and why.

@@ -321,8 +321,8 @@ impl HertzSetup {
         let field = |name: &str| {
             info.point_fields
                 .iter()
-                .find(|(n, _, _)| n == name)
-                .map(|(_, _, v)| v.as_slice())
+                .find(|f| f.name == name)
+                .map(|f| f.values.as_slice())
         };
         let force = self.symmetry
             * info

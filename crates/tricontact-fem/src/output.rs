@@ -29,6 +29,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::analysis::Analysis;
+use crate::assembly::PointField;
 use crate::atomic::write_atomic;
 use crate::driver::IncrementInfo;
 use crate::error::{FemError, Result};
@@ -138,7 +139,7 @@ struct State<'a> {
     nlgeom: bool,
     u: &'a [f64],
     reactions: &'a [f64],
-    point_fields: &'a [(String, usize, Vec<f64>)],
+    point_fields: &'a [PointField],
 }
 
 /// A [`State`] kept after its increment.
@@ -150,7 +151,7 @@ struct Snapshot {
     nlgeom: bool,
     u: Vec<f64>,
     reactions: Vec<f64>,
-    point_fields: Vec<(String, usize, Vec<f64>)>,
+    point_fields: Vec<PointField>,
 }
 
 impl Snapshot {
@@ -354,55 +355,29 @@ impl ResultWriter {
             .map(|b| b.material as f64)
             .chain(std::iter::repeat_n(-1.0, rigid))
             .collect();
+        let field = |name, components, values, integer| Field {
+            name,
+            components,
+            values,
+            integer,
+        };
         let mut point_data = vec![
-            Field {
-                name: "displacement",
-                components: 3,
-                values: &info.u[..3 * n],
-            },
-            Field {
-                name: "reaction",
-                components: 3,
-                values: &info.reactions[..3 * n],
-            },
-            Field {
-                name: "stress",
-                components: 6,
-                values: &fields.point_stress,
-            },
-            Field {
-                name: "von_mises",
-                components: 1,
-                values: &fields.point_von_mises,
-            },
+            field("displacement", 3, &info.u[..3 * n], false),
+            field("reaction", 3, &info.reactions[..3 * n], false),
+            field("stress", 6, &fields.point_stress, false),
+            field("von_mises", 1, &fields.point_von_mises, false),
         ];
-        for (name, components, values) in info.point_fields {
-            point_data.push(Field {
-                name,
-                components: *components,
-                values,
-            });
+        for f in info.point_fields {
+            point_data.push(field(&f.name, f.components, &f.values, f.integer));
         }
         let grid = Grid {
             points: &an.mesh.nodes,
             cells: &self.cells,
             point_data,
             cell_data: vec![
-                Field {
-                    name: "stress",
-                    components: 6,
-                    values: &fields.cell_stress,
-                },
-                Field {
-                    name: "von_mises",
-                    components: 1,
-                    values: &fields.cell_von_mises,
-                },
-                Field {
-                    name: "material",
-                    components: 1,
-                    values: &material,
-                },
+                field("stress", 6, &fields.cell_stress, false),
+                field("von_mises", 1, &fields.cell_von_mises, false),
+                field("material", 1, &material, true),
             ],
             time: Some(info.time),
         };

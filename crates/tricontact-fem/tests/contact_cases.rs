@@ -132,8 +132,8 @@ nlgeom = true
         let field = |k: &str| {
             info.point_fields
                 .iter()
-                .find(|(n, _, _)| n == k)
-                .map(|(_, _, v)| v.clone())
+                .find(|f| f.name == k)
+                .map(|f| f.values.clone())
                 .unwrap_or_default()
         };
         out.push((
@@ -684,14 +684,18 @@ fn contact_fields_and_history_columns_are_written() {
     let row: Vec<&str> = csv.lines().nth(1).expect("row").split(',').collect();
     assert_eq!(row.len(), header.split(',').count());
     let vtu = std::fs::read_to_string(dir.join("m_001_0001.vtu")).expect("vtu");
-    for field in [
-        "contact_force",
-        "contact_pressure",
-        "contact_gap",
-        "contact_status",
-        "contact_facet",
+    // Numbers that name something (a status, a face tag, a material) are integer arrays, so
+    // that ParaView shows them as such; the rest are floating point.
+    for (field, ty) in [
+        ("contact_force", "Float64"),
+        ("contact_pressure", "Float64"),
+        ("contact_gap", "Float64"),
+        ("contact_status", "Int64"),
+        ("contact_facet", "Int64"),
+        ("material", "Int64"),
     ] {
-        assert!(vtu.contains(&format!("Name=\"{field}\"")), "{field}");
+        let array = format!("type=\"{ty}\" Name=\"{field}\"");
+        assert!(vtu.contains(&array), "{array}");
     }
     // ASCII (set above), so a NaN would show as text.
     assert!(vtu.contains("format=\"ascii\"") && !vtu.contains("NaN"));
@@ -962,9 +966,9 @@ fn quadratic_contact_surfaces_carry_the_uniform_pressure() {
         let fields = terms.fields();
         let pressure = &fields
             .iter()
-            .find(|f| f.0 == "contact_pressure")
+            .find(|f| f.name == "contact_pressure")
             .expect("field")
-            .2;
+            .values;
         let slaves = &an.contacts[0].passes[0].slaves;
         let worst = slaves
             .iter()

@@ -85,6 +85,7 @@ fn vtu_encoding(n: usize) {
         name,
         components,
         values,
+        integer: false,
     };
     let grid = Grid {
         points: &mesh.nodes,
@@ -98,7 +99,10 @@ fn vtu_encoding(n: usize) {
         cell_data: vec![
             field("stress", 6, &cs),
             field("von_mises", 1, &cvm),
-            field("material", 1, &mat),
+            Field {
+                integer: true,
+                ..field("material", 1, &mat)
+            },
         ],
         time: Some(1.0),
     };

@@ -60,7 +60,7 @@ use tricontact::contact::{PROJECTION_TOLERANCE, choose_facet};
 use tricontact::search::{Bvh, Query};
 
 use crate::analysis::Analysis;
-use crate::assembly::ExtraTerms;
+use crate::assembly::{ExtraTerms, PointField};
 use crate::model::ContactMethod;
 use gap::Gap;
 pub use pair::ContactPair;
@@ -768,7 +768,7 @@ impl ExtraTerms for ContactTerms {
         self.trial_force.clone_from(&self.committed_force);
     }
 
-    fn point_fields(&self) -> Vec<(String, usize, Vec<f64>)> {
+    fn point_fields(&self) -> Vec<PointField> {
         if self.pairs.is_empty() {
             Vec::new()
         } else {

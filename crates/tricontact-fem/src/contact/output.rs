@@ -17,6 +17,7 @@
 //! the closed slave nodes that have an area; 0 when there are none).
 
 use super::ContactTerms;
+use crate::assembly::PointField;
 
 impl ContactTerms {
     /// `|contact force| / A` of node `a` at the committed state; at a corner of tri6 faces (no
@@ -38,7 +39,7 @@ impl ContactTerms {
 
     /// The point fields at the committed state.
     #[must_use]
-    pub fn fields(&self) -> Vec<(String, usize, Vec<f64>)> {
+    pub fn fields(&self) -> Vec<PointField> {
         let n = self.reference.len();
         let mut gap = vec![0.0; n];
         let mut status = vec![0.0; n];
@@ -63,12 +64,18 @@ impl ContactTerms {
         for (a, p) in pressure.iter_mut().enumerate() {
             *p = self.pressure(a).unwrap_or(0.0);
         }
+        let field = |name: &str, components, values, integer| PointField {
+            name: name.into(),
+            components,
+            values,
+            integer,
+        };
         vec![
-            ("contact_force".into(), 3, self.committed_force.clone()),
-            ("contact_pressure".into(), 1, pressure),
-            ("contact_gap".into(), 1, gap),
-            ("contact_status".into(), 1, status),
-            ("contact_facet".into(), 1, facet),
+            field("contact_force", 3, self.committed_force.clone(), false),
+            field("contact_pressure", 1, pressure, false),
+            field("contact_gap", 1, gap, false),
+            field("contact_status", 1, status, true),
+            field("contact_facet", 1, facet, true),
         ]
     }
 
