@@ -29,8 +29,9 @@ use crate::analysis::{Analysis, Load};
 use crate::assembly::{DofMap, ExtraTerms, Pattern, PointField, node_adjacency};
 use crate::error::{FemError, Result};
 use crate::linsolve::LinearSolver;
+use crate::linsolve::Structure;
 use crate::model::Extrapolation;
-use crate::newton::{Converged, Failure, IncrementProblem, solve_increment};
+use crate::newton::{Converged, Failure, IncrementProblem, solve_increment, structure};
 use crate::ordering::equation_order;
 use crate::rigid::check_supports;
 
@@ -262,6 +263,10 @@ pub fn external_forces(an: &Analysis, n_dofs: usize, s: usize, t: f64) -> Vec<f6
 /// names no node: their usual cause.
 const MULTIPLIER_HINT: &str = "; with Lagrange multipliers this usually means slave nodes are prescribed along the contact normal, so their constraints act on the master nodes alone and repeat each other: free those components or use method = \"penalty\"";
 
+/// Appended to the reason a step fails on an inverted element when its line search is off and
+/// would apply (the residual is an energy gradient: no multipliers, no follower pressure).
+const LINE_SEARCH_HINT: &str = "; line_search = true in this [[step]] may get through: it shortens a Newton correction that inverts an element";
+
 /// Most solves of one increment asked for by [`ExtraTerms::after_converged`].
 pub const MAX_OUTER: usize = 50;
 
@@ -396,11 +401,21 @@ pub fn run(
                     summary.cutbacks += 1;
                     attempts.push((t_new, failure.to_string()));
                     if !control.failed() {
+                        let searchable =
+                            structure(extra, &follower) == Structure::SymmetricDefinite;
+                        let search_hint = if matches!(failure, Failure::Inverted(_))
+                            && searchable
+                            && !step.line_search
+                        {
+                            LINE_SEARCH_HINT
+                        } else {
+                            ""
+                        };
                         return Err(FemError::NotConverged {
                             step: step.name.clone(),
                             load_factor: t,
                             target: t_new,
-                            reason: format!("{failure}{hint}"),
+                            reason: format!("{failure}{hint}{search_hint}"),
                             exhausted: control.exhausted(),
                             attempts: std::mem::take(&mut attempts),
                         });

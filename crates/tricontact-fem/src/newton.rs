@@ -180,6 +180,17 @@ pub struct IncrementProblem<'a> {
     pub force_scale: f64,
 }
 
+/// The structure of an increment's tangent: unsymmetric with follower pressure or unsymmetric
+/// terms, indefinite with multipliers. Where it is [`Structure::SymmetricDefinite`] the residual
+/// is an energy gradient, and `[[step]] line_search` applies.
+pub(crate) fn structure(extra: &dyn ExtraTerms, follower: &[(usize, f64)]) -> Structure {
+    match (extra.symmetric() && follower.is_empty(), extra.definite()) {
+        (false, _) => Structure::Unsymmetric,
+        (true, true) => Structure::SymmetricDefinite,
+        (true, false) => Structure::SymmetricIndefinite,
+    }
+}
+
 /// Solves one increment from the committed `u0`, iterating from `start` (`u0`, or the converged
 /// state of a previous solve of the same increment in an outer loop); the correction test measures
 /// `Δu` from `u0`.
@@ -195,11 +206,7 @@ pub fn solve_increment(
 ) -> Result<Converged, Failure> {
     let (an, dm) = (p.an, p.dm);
     let nlgeom = p.step.nlgeom;
-    let structure = match (extra.symmetric() && p.follower.is_empty(), extra.definite()) {
-        (false, _) => Structure::Unsymmetric,
-        (true, true) => Structure::SymmetricDefinite,
-        (true, false) => Structure::SymmetricIndefinite,
-    };
+    let structure = structure(extra, p.follower);
     let reuse = !extra.nonlinear();
     let mut u = start.to_vec();
     let mut dup = vec![0.0; u.len()];

@@ -845,6 +845,46 @@ fn a_rigid_master_facing_away_from_the_slave_is_rejected() {
     );
 }
 
+/// The `contact-block` example with the block pressed down by `depth` (its model's `-0.05`) and
+/// contact enforced by `method`.
+fn pressed_block(depth: &str, method: &str) -> Analysis {
+    let folder =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/contact-block");
+    let text = std::fs::read_to_string(folder.join("model.toml"))
+        .expect("text")
+        .replace("z = -0.05", &format!("z = -{depth}"))
+        .replace("method = \"multiplier\"", &format!("method = \"{method}\""));
+    let model = Model::parse(&text, &folder.join("model.toml")).expect("model");
+    let mesh = tricontact_fem::gmsh::read_msh(&folder.join("blocks.msh")).expect("mesh");
+    Analysis::new(&model, mesh).expect("analysis")
+}
+
+/// A step that fails on an inverted element suggests the line search where it would apply and is
+/// off: `contact-block` pressed 30 % with a penalty fails at the slide's first increment (the
+/// same run with `line_search = true` finishes: 33 increments, 235 iterations, 14 cutbacks).
+/// Pressed 40 % with multipliers it fails on an inverted element too, but the line search does
+/// not apply there, and the message does not mention it.
+#[test]
+fn a_failure_on_an_inverted_element_suggests_the_line_search_where_it_applies() {
+    let fail = |an: &Analysis| {
+        let mut terms = ContactTerms::new(an);
+        tricontact_fem::driver::run(an, &mut terms, &mut |_| Ok(()))
+            .expect_err("the run fails")
+            .to_string()
+    };
+    let hint = "line_search = true in this [[step]] may get through";
+    let penalty = fail(&pressed_block("0.15", "penalty"));
+    assert!(
+        penalty.contains("inverted (det F ≤ 0); ") && penalty.contains(hint),
+        "{penalty}"
+    );
+    let multiplier = fail(&pressed_block("0.20", "multiplier"));
+    assert!(
+        multiplier.contains("inverted (det F ≤ 0)") && !multiplier.contains("line_search"),
+        "{multiplier}"
+    );
+}
+
 /// A slave node whose facet was frozen after cycling is measured on that facet's plane, extended,
 /// only while its foot stays within `LOST_TOLERANCE` of the facet; beyond, the facet is chosen
 /// again. `contact-block` pressed down by 20 % and slid with the augmented Lagrangian: nodes of
@@ -854,15 +894,7 @@ fn a_rigid_master_facing_away_from_the_slave_is_rejected() {
 /// pair's tolerance of the base at the end.
 #[test]
 fn a_frozen_facet_is_left_when_the_node_slides_off_it() {
-    let folder =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/contact-block");
-    let text = std::fs::read_to_string(folder.join("model.toml"))
-        .expect("text")
-        .replace("z = -0.05", "z = -0.10")
-        .replace("method = \"multiplier\"", "method = \"augmented\"");
-    let model = Model::parse(&text, &folder.join("model.toml")).expect("model");
-    let mesh = tricontact_fem::gmsh::read_msh(&folder.join("blocks.msh")).expect("mesh");
-    let an = Analysis::new(&model, mesh).expect("analysis");
+    let an = pressed_block("0.10", "augmented");
     let (terms, records, notes) = common::solve_contact(&an);
     assert!(
         notes
