@@ -28,8 +28,7 @@
 use crate::analysis::{Analysis, Load};
 use crate::assembly::{DofMap, ExtraTerms, Pattern, PointField, node_adjacency};
 use crate::error::{FemError, Result};
-use crate::linsolve::LinearSolver;
-use crate::linsolve::Structure;
+use crate::linsolve::{LinearSolver, Structure};
 use crate::model::Extrapolation;
 use crate::newton::{Converged, Failure, IncrementProblem, solve_increment, structure};
 use crate::ordering::equation_order;
