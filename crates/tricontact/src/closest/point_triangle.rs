@@ -80,15 +80,9 @@ pub fn closest_point_on_triangle(a: &Vec3, b: &Vec3, c: &Vec3, p: &Vec3) -> Clos
     let (ab, ac) = (b - a, c - a);
     let size = ab.amax().max(ac.amax());
     if size < TINY && size > 0.0 {
-        let (feature, barycentric) = region_relative(&(ab / size), &(ac / size), &((p - a) / size));
-        if barycentric.iter().all(|v| v.is_finite()) {
-            let point = a * barycentric[0] + b * barycentric[1] + c * barycentric[2];
-            return ClosestPoint {
-                feature,
-                barycentric,
-                point,
-                distance: (p - point).norm(),
-            };
+        let scaled = region_relative(&(ab / size), &(ac / size), &((p - a) / size));
+        if scaled.1.iter().all(|v| v.is_finite()) {
+            return at_region(a, b, c, p, scaled).0;
         }
     }
     closest_point_and_distance_squared(a, b, c, p).0
@@ -113,7 +107,19 @@ pub fn closest_point_and_distance_squared(
     c: &Vec3,
     p: &Vec3,
 ) -> (ClosestPoint, f64) {
-    let (feature, barycentric) = region(a, b, c, p);
+    at_region(a, b, c, p, region(a, b, c, p))
+}
+
+/// The closest point `a N_a + b N_b + c N_c` of the region `(feature, [N_a, N_b, N_c])` of `p`,
+/// with its distance, and the squared distance.
+#[inline]
+fn at_region(
+    a: &Vec3,
+    b: &Vec3,
+    c: &Vec3,
+    p: &Vec3,
+    (feature, barycentric): (Feature, [f64; 3]),
+) -> (ClosestPoint, f64) {
     let point = a * barycentric[0] + b * barycentric[1] + c * barycentric[2];
     let d2 = (p - point).norm_squared();
     let closest = ClosestPoint {
