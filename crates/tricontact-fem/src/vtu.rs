@@ -238,7 +238,9 @@ fn check_grid(g: &Grid<'_>) -> std::io::Result<()> {
                 ));
             }
             let whole = |v: f64| v.fract() == 0.0 && v.abs() <= MAX_INTEGER;
-            if let Some(k) = f.values.iter().position(|&v| f.integer && !whole(v)) {
+            if f.integer
+                && let Some(k) = f.values.iter().position(|&v| !whole(v))
+            {
                 return bad(format!(
                     "integer field '{}' holds {} at index {k}",
                     f.name, f.values[k]
