@@ -37,7 +37,7 @@
 //! # Not exportable
 //! Follower pressures acting in an `nlgeom` step, and a master surface with faces of no body
 //! element whose nodes are not all held in every step (a rigid surface always is: the model check
-//! requires it; a surface mixing body faces with other faces may not be): [`write`] returns an
+//! requires it; a surface mixing body faces with other faces may not be): [`write()`] returns an
 //! error naming them.
 //!
 //! Set names are the group names reduced to letters, digits and `_` (CalculiX names are

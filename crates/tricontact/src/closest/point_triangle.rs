@@ -10,7 +10,7 @@
 //! The sub-areas that decide the edges and the face are, by Lagrange's identity, both products of
 //! those dot products (`d1 d4 − d3 d2`, …: cheap) and triple products with the normal
 //! `n·(ab × ap)`, … (exact to `ε / sin` where the products are exact to `ε / sin²`, `sin` that of
-//! the angle at `a`). A facet with `sin² < 10⁻⁴` ([`THIN`]) takes the triple products: on a valid
+//! the angle at `a`). A facet with `sin² < 10⁻⁴` (`THIN`) takes the triple products: on a valid
 //! sliver of sine 10⁻⁸ the products had put a point lying on the facet 2.5 % of its size away,
 //! farther than a corner, and the search missed the contact; with the triple products the error
 //! stays within 13 `ε / sin` of the facet's size (the precision to which its plane is known).
