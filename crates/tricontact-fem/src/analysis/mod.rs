@@ -1,0 +1,371 @@
+//! Resolution of a [`Model`] against a [`Mesh`]: bodies, materials, supports,
+//! loads and steps as index data ready for assembly, plus validation.
+//!
+//! Validation collects every problem (unknown groups, materials, conflicting
+//! supports, loads on nodes of no body, inverted or zero-volume elements)
+//! instead of stopping at the first, so `tricontact check` can list them.
+//!
+//! [`Analysis::build`] takes the model's sections in order, one file each: the steps
+//! (`steps.rs`), the materials and bodies with the quality of their elements (`bodies.rs`), the
+//! contact pairs (`contacts.rs`), the boundaries (`boundaries.rs`) and the loads (`loading.rs`).
+
+mod bodies;
+mod boundaries;
+mod contacts;
+mod loading;
+mod steps;
+
+use std::path::PathBuf;
+
+use crate::contact::ContactPair;
+use crate::error::{FemError, Result};
+use crate::material::Material;
+use crate::mesh::{ElementKind, Mesh};
+use crate::model::{Extrapolation, Model, OutputDef};
+use crate::shape::QPoint;
+
+/// A volume element taking part in the analysis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BodyElement {
+    /// Index into [`Mesh::elements`].
+    pub element: usize,
+    /// Index into [`Analysis::materials`].
+    pub material: usize,
+}
+
+/// A support or prescribed displacement on a node set.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Boundary {
+    /// Group name (history columns use it).
+    pub name: String,
+    /// Nodes (only nodes of bodies).
+    pub nodes: Vec<usize>,
+    /// Per component: `Some(target)` if constrained.
+    pub values: [Option<f64>; 3],
+    /// Active flag per step.
+    pub active: Vec<bool>,
+}
+
+/// A dead load as nodal forces at amplitude 1.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Load {
+    /// Group name.
+    pub name: String,
+    /// `(node, force)` pairs, sorted by node.
+    pub forces: Vec<(usize, [f64; 3])>,
+    /// Follower pressure `(p, oriented faces)`: in `nlgeom` steps it acts on
+    /// the deformed surface instead of `forces`.
+    pub follower: Option<(f64, Vec<(usize, f64)>)>,
+    /// Active flag per step.
+    pub active: Vec<bool>,
+}
+
+/// Step controls.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Step {
+    /// Name.
+    pub name: String,
+    /// Initial number of increments.
+    pub increments: usize,
+    /// Newton iterations per increment.
+    pub max_iterations: usize,
+    /// Relative residual tolerance.
+    pub residual_tolerance: f64,
+    /// Relative correction tolerance.
+    pub displacement_tolerance: f64,
+    /// Finite strain.
+    pub nlgeom: bool,
+    /// Allowed halvings of an increment.
+    pub max_cutbacks: usize,
+    /// Newton's starting point of an increment.
+    pub extrapolation: Extrapolation,
+    /// Line search along Newton corrections ([`crate::newton`]).
+    pub line_search: bool,
+}
+
+/// Everything the solver needs, resolved to indices.
+#[derive(Clone, Debug)]
+pub struct Analysis {
+    /// The mesh.
+    pub mesh: Mesh,
+    /// Materials.
+    pub materials: Vec<Material>,
+    /// Volume elements in bodies.
+    pub body: Vec<BodyElement>,
+    /// Quadrature rules per volume kind.
+    pub rules: Vec<(ElementKind, Vec<QPoint>)>,
+    /// Nodes used by some body element.
+    pub active_nodes: Vec<bool>,
+    /// Supports.
+    pub boundaries: Vec<Boundary>,
+    /// Loads.
+    pub loads: Vec<Load>,
+    /// Steps.
+    pub steps: Vec<Step>,
+    /// Contact pairs.
+    pub contacts: Vec<ContactPair>,
+    /// Output settings.
+    pub output: OutputDef,
+    /// Resolved output folder.
+    pub output_dir: PathBuf,
+    /// Notes on the model as written (a material no body uses), for [`Analysis::notes`].
+    model_notes: Vec<String>,
+}
+
+/// Most increments (and Newton iterations) a step may ask for.
+pub const MAX_INCREMENTS: usize = 1_000_000;
+
+/// Most halvings of an increment: 30 already make it 10⁻⁹ of the step.
+pub const MAX_CUTBACKS: usize = 30;
+
+/// Young's modulus accepted: `1/MAX_MODULUS < E < MAX_MODULUS`, far beyond any unit system at
+/// both ends, so that the default penalty `10 E h`, the stiffness matrix and the Lamé constants
+/// stay finite and nonzero.
+pub const MAX_MODULUS: f64 = 1e100;
+
+impl Analysis {
+    /// Resolves and validates; fails with the single problem found or with
+    /// [`FemError::Invalid`] listing all of them.
+    ///
+    /// # Errors
+    /// Any validation problem.
+    pub fn new(model: &Model, mesh: Mesh) -> Result<Self> {
+        mesh.check()?;
+        let (an, problems) = Self::build(model, mesh);
+        match FemError::combine(problems) {
+            None => Ok(an),
+            Some(e) => Err(e),
+        }
+    }
+
+    /// Quadrature rule of a volume kind.
+    #[must_use]
+    pub fn rule(&self, kind: ElementKind) -> &[QPoint] {
+        self.rules
+            .iter()
+            .find(|(k, _)| *k == kind)
+            .map_or(&[], |(_, r)| r.as_slice())
+    }
+
+    /// Remarks on the model that are not errors: a material no body uses, and, one per step and
+    /// cause, a `line_search` that
+    /// cannot apply (the residual is not an energy gradient: Lagrange multipliers, follower
+    /// pressures), and a body part whose rigid motion neither its boundaries nor the normals of
+    /// its contacts hold (frictionless contact holds a slave node, and the facet it faces, only
+    /// along the facet normal; the normals are those at the start, of slave nodes within reach of
+    /// a master facet). Without contact pairs such a body is an error, not a note.
+    #[must_use]
+    pub fn notes(&self) -> Vec<String> {
+        let mut notes = self.model_notes.clone();
+        notes.extend(self.line_search_notes());
+        if self.contacts.is_empty() {
+            return notes;
+        }
+        let held = self.initial_contact_normals();
+        for (s, step) in self.steps.iter().enumerate() {
+            let (mask, _) = crate::driver::step_constraints(self, s);
+            if let Err(m) = crate::rigid::check_supports_with(self, &mask, &held) {
+                notes.push(format!(
+                    "step '{}': with its boundaries and the initial contact normals, {}; \
+                     frictionless contact leaves such motion undetermined",
+                    step.name,
+                    m.trim_end_matches("; add supports")
+                ));
+            }
+        }
+        notes
+    }
+
+    /// `(node, normal)` for each slave node within reach of a master facet at the reference
+    /// positions, and for the nodes of that facet.
+    fn initial_contact_normals(&self) -> Vec<(usize, [f64; 3])> {
+        let x: Vec<tricontact::Vec3> = self
+            .mesh
+            .nodes
+            .iter()
+            .map(|p| tricontact::Vec3::new(p[0], p[1], p[2]))
+            .collect();
+        let mut held = Vec::new();
+        for pass in self.contacts.iter().flat_map(|c| &c.passes) {
+            let Ok(bvh) = tricontact::search::Bvh::build(&pass.surface, &x, pass.radius) else {
+                continue;
+            };
+            for &s in &pass.slaves {
+                let Some((f, pair)) = u32::try_from(s).ok().and_then(|node| {
+                    tricontact::contact::choose_facet(&pass.surface, &bvh, &x, node, pass.radius)
+                }) else {
+                    continue;
+                };
+                let w = pair.facet.normal();
+                let w = [w[0], w[1], w[2]];
+                held.push((s, w));
+                for a in pass.surface.facets()[f as usize] {
+                    held.push((a as usize, w));
+                }
+            }
+        }
+        held
+    }
+
+    fn line_search_notes(&self) -> Vec<String> {
+        let multipliers: Vec<&str> = self
+            .contacts
+            .iter()
+            .filter(|c| c.method == crate::model::ContactMethod::Multiplier)
+            .map(|c| c.name.as_str())
+            .collect();
+        let mut notes = Vec::new();
+        for (s, step) in self
+            .steps
+            .iter()
+            .enumerate()
+            .filter(|(_, st)| st.line_search)
+        {
+            let followers: Vec<&str> = self
+                .loads
+                .iter()
+                .filter(|l| l.follower.is_some() && l.active[s])
+                .map(|l| l.name.as_str())
+                .collect();
+            for (what, names) in [
+                ("Lagrange-multiplier contact", &multipliers),
+                ("follower pressure", &followers),
+            ] {
+                if !names.is_empty() {
+                    notes.push(format!(
+                        "step '{}': line_search is ignored with {what} ({}): the residual is not \
+                         the gradient of an energy",
+                        step.name,
+                        names.join(", ")
+                    ));
+                }
+            }
+        }
+        notes
+    }
+
+    /// Number of nodal degrees of freedom (`3 × nodes`, inactive included).
+    #[must_use]
+    pub fn num_nodal_dofs(&self) -> usize {
+        3 * self.mesh.nodes.len()
+    }
+
+    /// Reference coordinates and displacements of the nodes of mesh element `element`, taken from
+    /// the global displacement vector `u` (`3a + i`).
+    #[must_use]
+    pub fn element_state(&self, element: usize, u: &[f64]) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+        let nodes = &self.mesh.elements[element].nodes;
+        let x0 = nodes.iter().map(|&a| self.mesh.nodes[a]).collect();
+        let ue = nodes
+            .iter()
+            .map(|&a| [u[3 * a], u[3 * a + 1], u[3 * a + 2]])
+            .collect();
+        (x0, ue)
+    }
+
+    /// Resolves the model, returning the analysis and every problem found. The mesh must pass
+    /// [`Mesh::check`] (the Gmsh reader's meshes do; [`Analysis::new`] checks it).
+    ///
+    /// When a body cannot be resolved, the checks that depend on which nodes belong to a body
+    /// (supports, loads, contact) are skipped: they would only repeat the problem.
+    #[must_use]
+    pub fn build(model: &Model, mut mesh: Mesh) -> (Self, Vec<FemError>) {
+        let mut problems: Vec<FemError> = Vec::new();
+        let p = &mut problems;
+        let steps = steps::resolve(model, p);
+        let (materials, by_name) = bodies::materials(model, p);
+        let (body, bodies_ok) = bodies::resolve(model, &mesh, &by_name, p);
+        let mut active_nodes = bodies::nodes(&mesh, &body);
+        let rules = bodies::rules(&mesh, &body);
+        bodies::check_quality(&mesh, &body, &rules, p);
+        // Contact pairs may move adjusted slave nodes; rigid master nodes become active.
+        let before_contacts = p.len();
+        let (contacts, rigid) = contacts::resolve(
+            model,
+            &mut mesh,
+            &body,
+            &materials,
+            &active_nodes,
+            bodies_ok,
+            p,
+        );
+        for (a, &r) in rigid.iter().enumerate() {
+            if r {
+                active_nodes[a] = true;
+            }
+        }
+        // Nodes belong to a body, or to a rigid master, only once both resolved.
+        let nodes_known = bodies_ok && p.len() == before_contacts;
+        let (boundaries, boundary_defs) =
+            boundaries::resolve(model, &mesh, &steps, &active_nodes, nodes_known, p);
+        boundaries::check_conflicts(model, &mesh, &steps, &boundaries, &boundary_defs, p);
+        boundaries::check_rigid_nodes(model, &mesh, &steps, &boundaries, &rigid, p);
+        let loads = loading::resolve(model, &mesh, &steps, &body, &active_nodes, nodes_known, p);
+        check_output(model, p);
+        let an = Self {
+            model_notes: unused_materials(model),
+            mesh,
+            materials,
+            body,
+            rules,
+            active_nodes,
+            boundaries,
+            loads,
+            contacts,
+            steps,
+            output: model.output.clone(),
+            output_dir: model.output_dir(),
+        };
+        (an, problems)
+    }
+}
+
+/// A problem described by one message.
+fn invalid(s: String) -> FemError {
+    FemError::Invalid(vec![s])
+}
+
+/// A group of `kind` named `name` that the mesh does not have, at the model's place `at`.
+fn unknown(at: String, kind: &'static str, name: &str, mesh: &Mesh) -> FemError {
+    FemError::UnknownGroup {
+        at,
+        kind,
+        name: name.to_string(),
+        available: mesh.group_list(),
+    }
+}
+
+/// The `[output]` settings that cannot be used.
+fn check_output(model: &Model, problems: &mut Vec<FemError>) {
+    let src = &model.source;
+    if model.output.every == 0 {
+        problems.push(invalid(format!(
+            "{}output.every must be ≥ 1",
+            src.at("output", 0, "every")
+        )));
+    }
+    if model.output.folder.as_os_str().is_empty() {
+        problems.push(invalid(format!(
+            "{}output.folder is empty (give a folder; \".\" for the model's own)",
+            src.at("output", 0, "folder")
+        )));
+    }
+}
+
+/// A note for each material no body uses: most likely a body given the wrong one.
+fn unused_materials(model: &Model) -> Vec<String> {
+    let src = &model.source;
+    model
+        .materials
+        .iter()
+        .enumerate()
+        .filter(|(_, m)| !model.bodies.iter().any(|b| b.material == m.name))
+        .map(|(i, m)| {
+            format!(
+                "{}material '{}' is used by no body",
+                src.at("material", i, "name"),
+                m.name
+            )
+        })
+        .collect()
+}
