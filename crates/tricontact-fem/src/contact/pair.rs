@@ -29,7 +29,7 @@ use tricontact::contact::choose_facet;
 use tricontact::search::{Bvh, Surface};
 
 use crate::loads::{node_to_elements, outward_faces};
-use crate::mesh::{Element, ElementKind, Mesh};
+use crate::mesh::{Element, ElementKind, Group, Mesh};
 use crate::model::{ContactDef, ContactMethod};
 
 /// One search pass: slave nodes against the facets of a surface.
@@ -299,79 +299,12 @@ pub fn resolve(
     at: &dyn Fn(&str) -> String,
 ) -> Result<ContactPair, Vec<String>> {
     let name = format!("{}-{}", def.slave, def.master);
-    let mut problems = Vec::new();
-    if def.two_pass && def.method == ContactMethod::Multiplier {
-        problems.push(format!(
-            "{}contact '{name}': two_pass with method = \"multiplier\" gives redundant constraints (each node pair constrained twice, a singular saddle-point system); use single pass or the penalty or augmented method",
-            at("two_pass")
-        ));
-    }
-    if let Some(a) = def.penalty
-        && !(a > 0.0 && a.is_finite())
-    {
-        problems.push(format!(
-            "{}contact '{name}': penalty must be > 0 (got {a})",
-            at("penalty")
-        ));
-    }
-    if !(def.tolerance > 0.0 && def.tolerance.is_finite()) {
-        problems.push(format!(
-            "{}contact '{name}': tolerance must be > 0 (got {})",
-            at("tolerance"),
-            def.tolerance
-        ));
-    }
-    if let Some(d) = def.adjust
-        && !(d >= 0.0 && d.is_finite())
-    {
-        problems.push(format!(
-            "{}contact '{name}': adjust must be ≥ 0 (got {d})",
-            at("adjust")
-        ));
-    }
+    let mut problems = check_parameters(def, &name, at);
     let node_elems = node_to_elements(mesh.nodes.len(), &bodies.elements);
-    let master = match mesh.lookup(&def.master, Some(2)) {
-        Err(m) => {
-            problems.push(format!("{}contact '{name}': master: {m}", at("master")));
-            None
-        }
-        Ok(Some(g)) if g.dim == 2 => Some(g.clone()),
-        Ok(Some(g)) => {
-            problems.push(format!(
-                "{}contact '{name}': master '{}' has dimension {}, a surface (2D) group is needed",
-                at("master"),
-                g.name,
-                g.dim
-            ));
-            None
-        }
-        Ok(None) => {
-            problems.push(format!(
-                "{}contact '{name}': unknown master surface group '{}' (groups: {})",
-                at("master"),
-                def.master,
-                mesh.group_list()
-            ));
-            None
-        }
-    };
-    let slave = match mesh.lookup(&def.slave, Some(2)) {
-        Ok(Some(g)) => Some(g.clone()),
-        Ok(None) => {
-            problems.push(format!(
-                "{}contact '{name}': unknown slave group '{}' (groups: {})",
-                at("slave"),
-                def.slave,
-                mesh.group_list()
-            ));
-            None
-        }
-        Err(m) => {
-            problems.push(format!("{}contact '{name}': slave: {m}", at("slave")));
-            None
-        }
-    };
-    let (Some(master), Some(slave)) = (master, slave) else {
+    let (Some(master), Some(slave)) = (
+        master_group(def, mesh, &name, at, &mut problems),
+        slave_group(def, mesh, &name, at, &mut problems),
+    ) else {
         return Err(problems);
     };
     let (m_facets, m_tags) = match oriented_facets(
@@ -438,20 +371,7 @@ pub fn resolve(
             }
         }
     }
-    // Young's modulus for the default penalty.
-    let owner_e = |faces: &[usize]| {
-        faces.iter().find_map(|&f| {
-            let c = &mesh.elements[f].nodes;
-            node_elems[c[0]]
-                .iter()
-                .find(|&&e| c.iter().all(|a| bodies.elements[e].nodes.contains(a)))
-                .map(|&e| bodies.youngs[e])
-        })
-    };
-    let slave_e = slaves
-        .first()
-        .and_then(|&a| node_elems[a].first().map(|&e| bodies.youngs[e]));
-    let e = owner_e(&master.elements).or(slave_e).unwrap_or(1.0);
+    let e = youngs_modulus(mesh, bodies, &node_elems, &master.elements, &slaves);
     let (h_mean, h_max) = edge_lengths(mesh, &m_facets);
     let penalty = def.penalty.unwrap_or(10.0 * e * h_mean);
     // A valid material has a finite, positive modulus: any other `e` comes from a material that
@@ -468,112 +388,31 @@ pub fn resolve(
         return Err(problems);
     }
     let surface = search_surface(&name, m_facets, &m_tags, mesh, &at("master"))?;
-    let mut report = Vec::new();
-    // Initial penetrations and adjust.
-    {
-        let x = positions(mesh);
-        let bvh =
-            Bvh::build(&surface, &x, h_max).map_err(|e| vec![format!("{}{e}", at("master"))])?;
-        let adjust = def.adjust.unwrap_or(0.0);
-        let (mut moved, mut deep, mut largest, mut worst) = (0usize, 0usize, 0.0f64, 0usize);
-        let mut moves = Vec::new();
-        // A rigid master keeps the mesh's node order: count the slave nodes whose facet's normal
-        // points the way the slave surface's outward normal does (into the slave body).
-        let rigid_master = surface
-            .facets()
-            .iter()
-            .flatten()
-            .all(|&a| !in_body[a as usize]);
-        let slave_normals = outward_normals(&x, &s_facets);
-        let (mut facing, mut away) = (0usize, 0usize);
-        for &a in &slaves {
-            let Ok(idx) = u32::try_from(a) else { continue };
-            let Some((_, pair)) = choose_facet(&surface, &bvh, &x, idx, h_max) else {
-                continue;
-            };
-            // Only where the two surfaces are roughly parallel (|cos| > 1/2): a slave face at
-            // right angles to the master (a symmetry plane) says nothing.
-            if let Some(n) = slave_normals.get(&a).and_then(|n| n.try_normalize(0.0)) {
-                let cos = pair.facet.normal().dot(&n);
-                facing += usize::from(cos < -0.5);
-                away += usize::from(cos > 0.5);
-            }
-            let p = pair.gap();
-            if p >= 0.0 {
-                continue;
-            }
-            if -p <= adjust {
-                moves.push((a, -p * pair.facet.normal()));
-                moved += 1;
-            } else if -p > 1e-12 * h_mean {
-                deep += 1;
-                if -p > largest {
-                    largest = -p;
-                    worst = a;
-                }
-            }
-        }
-        if rigid_master && away > facing {
-            return Err(vec![format!(
-                "{}contact '{name}': the normals of the rigid master '{}' point into the slave surface at {away} of the {} slave nodes facing it; a face of no body element keeps the mesh's node order, and its normal (x_j − x_i) × (x_k − x_i) must point towards the slave: reverse the order of its nodes",
-                at("master"),
-                def.master,
-                away + facing
-            )]);
-        }
-        for (a, d) in moves {
-            for i in 0..3 {
-                mesh.nodes[a][i] += d[i];
-            }
-        }
-        if moved > 0 {
-            report.push(format!(
-                "contact '{name}': {moved} slave nodes moved onto the master surface (adjust = {adjust:e})"
-            ));
-        }
-        if deep > 0 {
-            report.push(format!(
-                "contact '{name}': {deep} slave nodes initially penetrate beyond adjust, largest {largest:.3e} at node {} ({:.4e}, {:.4e}, {:.4e})",
-                mesh.node_tags[worst], mesh.nodes[worst][0], mesh.nodes[worst][1], mesh.nodes[worst][2]
-            ));
-        }
-    }
-    let (s_areas, s_proxies) = nodal_areas(mesh, &slave_faces);
-    let areas = slaves
-        .iter()
-        .map(|a| s_areas.get(a).copied().unwrap_or(0.0))
-        .collect();
-    let proxies = slaves
-        .iter()
-        .map(|a| s_proxies.get(a).cloned().unwrap_or_default())
-        .collect();
-    let mut passes = vec![Pass {
-        slaves,
-        areas,
-        proxies,
+    let report = initial_penetrations(
+        def,
+        &name,
+        mesh,
+        &surface,
+        &Slaves {
+            nodes: &slaves,
+            facets: &s_facets,
+            in_body,
+        },
+        (h_mean, h_max),
+        at,
+    )?;
+    let mut passes = vec![pass(
+        mesh,
+        Some(slaves),
+        &slave_faces,
         surface,
-        face_tags: m_tags,
-        radius: h_max,
-    }];
+        m_tags,
+        h_max,
+    )];
     if def.two_pass {
-        let (m_areas, m_proxies) = nodal_areas(mesh, &master.elements);
-        let mut m_nodes: Vec<usize> = m_areas.keys().copied().collect();
-        m_nodes.sort_unstable();
-        let areas = m_nodes.iter().map(|a| m_areas[a]).collect();
-        let proxies = m_nodes
-            .iter()
-            .map(|a| m_proxies.get(a).cloned().unwrap_or_default())
-            .collect();
         let (_, s_max) = edge_lengths(mesh, &s_facets);
         let surface = search_surface(&name, s_facets, &s_tags, mesh, &at("slave"))?;
-        passes.push(Pass {
-            slaves: m_nodes,
-            areas,
-            proxies,
-            surface,
-            face_tags: s_tags,
-            radius: s_max,
-        });
+        passes.push(pass(mesh, None, &master.elements, surface, s_tags, s_max));
     }
     Ok(ContactPair {
         name,
@@ -587,4 +426,251 @@ pub fn resolve(
         passes,
         report,
     })
+}
+
+/// Young's modulus for the default penalty: that of the body the first master face (of
+/// `master_faces`) bounds, else that of the first slave node's first element (a rigid master),
+/// else 1.
+fn youngs_modulus(
+    mesh: &Mesh,
+    bodies: &Bodies<'_>,
+    node_elems: &[Vec<usize>],
+    master_faces: &[usize],
+    slaves: &[usize],
+) -> f64 {
+    let owner_e = |faces: &[usize]| {
+        faces.iter().find_map(|&f| {
+            let c = &mesh.elements[f].nodes;
+            node_elems[c[0]]
+                .iter()
+                .find(|&&e| c.iter().all(|a| bodies.elements[e].nodes.contains(a)))
+                .map(|&e| bodies.youngs[e])
+        })
+    };
+    let slave_e = slaves
+        .first()
+        .and_then(|&a| node_elems[a].first().map(|&e| bodies.youngs[e]));
+    owner_e(master_faces).or(slave_e).unwrap_or(1.0)
+}
+
+/// One search pass against `surface` (from faces of Gmsh tags `face_tags`, search radius
+/// `radius`): the slave `nodes` (`None`: every node of `faces`, in order) with their tributary
+/// areas and tri6 proxies over `faces`.
+fn pass(
+    mesh: &Mesh,
+    nodes: Option<Vec<usize>>,
+    faces: &[usize],
+    surface: Surface,
+    face_tags: Vec<u64>,
+    radius: f64,
+) -> Pass {
+    let (areas_of, proxies_of) = nodal_areas(mesh, faces);
+    let slaves = nodes.unwrap_or_else(|| {
+        let mut all: Vec<usize> = areas_of.keys().copied().collect();
+        all.sort_unstable();
+        all
+    });
+    let areas = slaves
+        .iter()
+        .map(|a| areas_of.get(a).copied().unwrap_or(0.0))
+        .collect();
+    let proxies = slaves
+        .iter()
+        .map(|a| proxies_of.get(a).cloned().unwrap_or_default())
+        .collect();
+    Pass {
+        slaves,
+        areas,
+        proxies,
+        surface,
+        face_tags,
+        radius,
+    }
+}
+
+/// The checks of a `[[contact]]` table's own values, as messages.
+fn check_parameters(def: &ContactDef, name: &str, at: &dyn Fn(&str) -> String) -> Vec<String> {
+    let mut problems = Vec::new();
+    if def.two_pass && def.method == ContactMethod::Multiplier {
+        problems.push(format!(
+            "{}contact '{name}': two_pass with method = \"multiplier\" gives redundant constraints (each node pair constrained twice, a singular saddle-point system); use single pass or the penalty or augmented method",
+            at("two_pass")
+        ));
+    }
+    if let Some(a) = def.penalty
+        && !(a > 0.0 && a.is_finite())
+    {
+        problems.push(format!(
+            "{}contact '{name}': penalty must be > 0 (got {a})",
+            at("penalty")
+        ));
+    }
+    if !(def.tolerance > 0.0 && def.tolerance.is_finite()) {
+        problems.push(format!(
+            "{}contact '{name}': tolerance must be > 0 (got {})",
+            at("tolerance"),
+            def.tolerance
+        ));
+    }
+    if let Some(d) = def.adjust
+        && !(d >= 0.0 && d.is_finite())
+    {
+        problems.push(format!(
+            "{}contact '{name}': adjust must be ≥ 0 (got {d})",
+            at("adjust")
+        ));
+    }
+    problems
+}
+
+/// The master surface group of `def`, or a problem.
+fn master_group(
+    def: &ContactDef,
+    mesh: &Mesh,
+    name: &str,
+    at: &dyn Fn(&str) -> String,
+    problems: &mut Vec<String>,
+) -> Option<Group> {
+    match mesh.lookup(&def.master, Some(2)) {
+        Err(m) => {
+            problems.push(format!("{}contact '{name}': master: {m}", at("master")));
+            None
+        }
+        Ok(Some(g)) if g.dim == 2 => Some(g.clone()),
+        Ok(Some(g)) => {
+            problems.push(format!(
+                "{}contact '{name}': master '{}' has dimension {}, a surface (2D) group is needed",
+                at("master"),
+                g.name,
+                g.dim
+            ));
+            None
+        }
+        Ok(None) => {
+            problems.push(format!(
+                "{}contact '{name}': unknown master surface group '{}' (groups: {})",
+                at("master"),
+                def.master,
+                mesh.group_list()
+            ));
+            None
+        }
+    }
+}
+
+/// The slave group of `def` (a surface or a node set), or a problem.
+fn slave_group(
+    def: &ContactDef,
+    mesh: &Mesh,
+    name: &str,
+    at: &dyn Fn(&str) -> String,
+    problems: &mut Vec<String>,
+) -> Option<Group> {
+    match mesh.lookup(&def.slave, Some(2)) {
+        Ok(Some(g)) => Some(g.clone()),
+        Ok(None) => {
+            problems.push(format!(
+                "{}contact '{name}': unknown slave group '{}' (groups: {})",
+                at("slave"),
+                def.slave,
+                mesh.group_list()
+            ));
+            None
+        }
+        Err(m) => {
+            problems.push(format!("{}contact '{name}': slave: {m}", at("slave")));
+            None
+        }
+    }
+}
+
+/// The slave side of a pair, for [`initial_penetrations`]: its nodes, its facets (none for a node
+/// set) and which nodes belong to a body.
+struct Slaves<'a> {
+    nodes: &'a [usize],
+    facets: &'a [[u32; 3]],
+    in_body: &'a [bool],
+}
+
+/// The slave nodes that start inside the master `surface`: those within `adjust` are moved onto
+/// it in `mesh`, the deeper ones are counted; returns what to report. A rigid master whose normals
+/// point into the slave surface is refused. `(h_mean, h_max)`: the master's mean and longest
+/// edge (the search radius).
+fn initial_penetrations(
+    def: &ContactDef,
+    name: &str,
+    mesh: &mut Mesh,
+    surface: &Surface,
+    slave: &Slaves<'_>,
+    (h_mean, h_max): (f64, f64),
+    at: &dyn Fn(&str) -> String,
+) -> Result<Vec<String>, Vec<String>> {
+    let (slaves, s_facets, in_body) = (slave.nodes, slave.facets, slave.in_body);
+    let mut report = Vec::new();
+    let x = positions(mesh);
+    let bvh = Bvh::build(surface, &x, h_max).map_err(|e| vec![format!("{}{e}", at("master"))])?;
+    let adjust = def.adjust.unwrap_or(0.0);
+    let (mut moved, mut deep, mut largest, mut worst) = (0usize, 0usize, 0.0f64, 0usize);
+    let mut moves = Vec::new();
+    // A rigid master keeps the mesh's node order: count the slave nodes whose facet's normal
+    // points the way the slave surface's outward normal does (into the slave body).
+    let rigid_master = surface
+        .facets()
+        .iter()
+        .flatten()
+        .all(|&a| !in_body[a as usize]);
+    let slave_normals = outward_normals(&x, s_facets);
+    let (mut facing, mut away) = (0usize, 0usize);
+    for &a in slaves {
+        let Ok(idx) = u32::try_from(a) else { continue };
+        let Some((_, pair)) = choose_facet(surface, &bvh, &x, idx, h_max) else {
+            continue;
+        };
+        // Only where the two surfaces are roughly parallel (|cos| > 1/2): a slave face at
+        // right angles to the master (a symmetry plane) says nothing.
+        if let Some(n) = slave_normals.get(&a).and_then(|n| n.try_normalize(0.0)) {
+            let cos = pair.facet.normal().dot(&n);
+            facing += usize::from(cos < -0.5);
+            away += usize::from(cos > 0.5);
+        }
+        let p = pair.gap();
+        if p >= 0.0 {
+            continue;
+        }
+        if -p <= adjust {
+            moves.push((a, -p * pair.facet.normal()));
+            moved += 1;
+        } else if -p > 1e-12 * h_mean {
+            deep += 1;
+            if -p > largest {
+                largest = -p;
+                worst = a;
+            }
+        }
+    }
+    if rigid_master && away > facing {
+        return Err(vec![format!(
+            "{}contact '{name}': the normals of the rigid master '{}' point into the slave surface at {away} of the {} slave nodes facing it; a face of no body element keeps the mesh's node order, and its normal (x_j − x_i) × (x_k − x_i) must point towards the slave: reverse the order of its nodes",
+            at("master"),
+            def.master,
+            away + facing
+        )]);
+    }
+    for (a, d) in moves {
+        for i in 0..3 {
+            mesh.nodes[a][i] += d[i];
+        }
+    }
+    if moved > 0 {
+        report.push(format!(
+            "contact '{name}': {moved} slave nodes moved onto the master surface (adjust = {adjust:e})"
+        ));
+    }
+    if deep > 0 {
+        report.push(format!(
+            "contact '{name}': {deep} slave nodes initially penetrate beyond adjust, largest {largest:.3e} at node {} ({:.4e}, {:.4e}, {:.4e})",
+            mesh.node_tags[worst], mesh.nodes[worst][0], mesh.nodes[worst][1], mesh.nodes[worst][2]
+        ));
+    }
+    Ok(report)
 }
