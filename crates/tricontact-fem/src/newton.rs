@@ -43,7 +43,7 @@
 //! inverted element, or a singular tangent.
 
 use crate::analysis::{Analysis, Step};
-use crate::assembly::{AssemblyError, DofMap, ExtraTerms, NO_EQ, Pattern, assemble};
+use crate::assembly::{Assembled, AssemblyError, DofMap, ExtraTerms, NO_EQ, Pattern, assemble};
 use crate::follower;
 use crate::line_search::LineSearch;
 use crate::linsolve::{LinearSolver, Structure};
@@ -271,36 +271,14 @@ pub fn solve_increment(
             Err(AssemblyError::Extra(m)) => return Err(Failure::Diverged(m)),
         };
         let mut asm = asm;
-        if !p.follower.is_empty() {
-            let mut trip = Vec::new();
-            for &(li, pressure) in p.follower {
-                if let Some((_, faces)) = &an.loads[li].follower {
-                    follower::pressure_terms(
-                        &an.mesh,
-                        faces,
-                        pressure,
-                        &u,
-                        &mut asm.residual,
-                        Some(&mut trip),
-                    );
-                }
-            }
-            for (r, c, v) in trip {
-                let (er, ec) = (dm.eq[r], dm.eq[c]);
-                if er != NO_EQ && ec != NO_EQ {
-                    asm.extra.push(faer::sparse::Triplet::new(er, ec, v));
-                }
-            }
-        }
+        add_follower_terms(p, &u, &mut asm);
         let mut r = asm.residual.clone();
         for (ri, fi) in r.iter_mut().zip(p.fext) {
             *ri -= fi;
         }
-        let mut rhs = vec![0.0; dm.n_eq];
-        for (dof, &e) in dm.eq.iter().enumerate() {
-            if e != NO_EQ {
-                rhs[e] = -r[dof];
-            }
+        let mut rhs = free_entries(dm, &r);
+        for b in &mut rhs {
+            *b = -*b;
         }
         let rnorm = weighted(&rhs, &weights.residual);
         if predictor {
@@ -355,29 +333,13 @@ pub fn solve_increment(
                 )));
             }
             if iterations >= p.step.max_iterations {
-                let relative = rnorm / reference;
-                let correction = du_norm * ratio / du_total;
-                let hint = match (residual_met, relative, correction) {
-                    (false, r, _) if r < ROUND_OFF => round_off_hint("residual", r),
-                    (true, _, c) if c < ROUND_OFF => round_off_hint("displacement", c),
-                    _ => String::new(),
-                };
-                let unmet = if residual_met {
-                    format!(
-                        "relative residual {relative:.3e} met, estimated correction \
-                         {correction:.3e} > displacement_tolerance {:e}",
-                        p.step.displacement_tolerance
-                    )
-                } else {
-                    format!(
-                        "relative residual {relative:.3e} > residual_tolerance {:e}",
-                        p.step.residual_tolerance
-                    )
-                };
-                return Err(Failure::Diverged(format!(
-                    "no convergence in {iterations} iteration{} ({unmet}){hint}",
-                    if iterations == 1 { "" } else { "s" }
-                )));
+                return Err(not_converged(
+                    p.step,
+                    iterations,
+                    residual_met,
+                    rnorm / reference,
+                    du_norm * ratio / du_total,
+                ));
             }
         } else if current == 0.0 && dup.iter().all(|&d| d == 0.0) {
             return Ok(Converged {
@@ -395,36 +357,14 @@ pub fn solve_increment(
             solver.reset();
         }
         if need_tangent {
-            // Extra unknowns in scaled variables (multipliers `λ = κ μ`, constraint rows × κ): the
-            // tangent's blocks then share one scale whatever the model's units, which keeps the
-            // factorization (and its `LDLᵀ` acceptance test) independent of them.
-            let w = &weights.residual;
-            for t in &mut asm.extra {
-                t.val *= w[t.row] * w[t.col];
-            }
-            let k = asm.matrix(p.pat);
-            let factor = solver
-                .factor(k.as_ref(), structure)
-                .map_err(|s| Failure::Singular(s.0))?;
-            solver.cached = Some(factor);
+            factor_tangent(p.pat, &mut asm, &weights, structure, solver)?;
         }
-        let factor = solver.cached.as_ref().expect("factored above");
-        method = factor.method();
-        let scaled: Vec<f64> = rhs
-            .iter()
-            .zip(&weights.residual)
-            .map(|(r, w)| r * w)
-            .collect();
-        let mut du = factor.solve(&scaled);
-        for (d, w) in du.iter_mut().zip(&weights.residual) {
-            *d *= w;
-        }
+        let (du, m) = correction(solver, &rhs, &weights);
+        method = m;
         if !constant_tangent {
             solver.cached = None;
         }
-        if du.iter().any(|v| !v.is_finite()) {
-            return Err(Failure::Singular("non-finite solution".into()));
-        }
+        let du = du?;
         for (dof, &e) in dm.eq.iter().enumerate() {
             if e != NO_EQ {
                 u[dof] += du[e];
@@ -443,4 +383,125 @@ pub fn solve_increment(
         }
         iterations += 1;
     }
+}
+
+/// Adds the follower pressures of `p` at `u` to the residual and their tangent to the extra
+/// triplets of `asm` (free equations only).
+fn add_follower_terms(p: &IncrementProblem<'_>, u: &[f64], asm: &mut Assembled) {
+    let (an, dm) = (p.an, p.dm);
+    if p.follower.is_empty() {
+        return;
+    }
+    let mut trip = Vec::new();
+    for &(li, pressure) in p.follower {
+        if let Some((_, faces)) = &an.loads[li].follower {
+            follower::pressure_terms(
+                &an.mesh,
+                faces,
+                pressure,
+                u,
+                &mut asm.residual,
+                Some(&mut trip),
+            );
+        }
+    }
+    for (r, c, v) in trip {
+        let (er, ec) = (dm.eq[r], dm.eq[c]);
+        if er != NO_EQ && ec != NO_EQ {
+            asm.extra.push(faer::sparse::Triplet::new(er, ec, v));
+        }
+    }
+}
+
+/// The entries of the global vector `v` at the free equations, in equation order.
+fn free_entries(dm: &DofMap, v: &[f64]) -> Vec<f64> {
+    let mut out = vec![0.0; dm.n_eq];
+    for (dof, &e) in dm.eq.iter().enumerate() {
+        if e != NO_EQ {
+            out[e] = v[dof];
+        }
+    }
+    out
+}
+
+/// Factors the tangent of `asm` into `solver.cached`. The extra unknowns are taken in scaled
+/// variables (multipliers `λ = κ μ`, constraint rows × κ): the tangent's blocks then share one
+/// scale whatever the model's units, which keeps the factorization (and its `LDLᵀ` acceptance
+/// test) independent of them.
+fn factor_tangent(
+    pat: &Pattern,
+    asm: &mut Assembled,
+    weights: &Weights,
+    structure: Structure,
+    solver: &mut LinearSolver,
+) -> Result<(), Failure> {
+    let w = &weights.residual;
+    for t in &mut asm.extra {
+        t.val *= w[t.row] * w[t.col];
+    }
+    let k = asm.matrix(pat);
+    let factor = solver
+        .factor(k.as_ref(), structure)
+        .map_err(|s| Failure::Singular(s.0))?;
+    solver.cached = Some(factor);
+    Ok(())
+}
+
+/// The correction for the right-hand side `rhs` by the cached factorization (in the scaled
+/// variables of [`factor_tangent`], scaled back), and the factorization's method.
+fn correction(
+    solver: &LinearSolver,
+    rhs: &[f64],
+    weights: &Weights,
+) -> (Result<Vec<f64>, Failure>, &'static str) {
+    let Some(factor) = solver.cached.as_ref() else {
+        return (Err(Failure::Singular("no factorization".into())), "none");
+    };
+    let scaled: Vec<f64> = rhs
+        .iter()
+        .zip(&weights.residual)
+        .map(|(r, w)| r * w)
+        .collect();
+    let mut du = factor.solve(&scaled);
+    for (d, w) in du.iter_mut().zip(&weights.residual) {
+        *d *= w;
+    }
+    let method = factor.method();
+    if du.iter().any(|v| !v.is_finite()) {
+        return (Err(Failure::Singular("non-finite solution".into())), method);
+    }
+    (Ok(du), method)
+}
+
+/// The failure of an increment that used its `iterations` without converging: which test is
+/// unmet (`residual_met`: the `relative` residual's; else the estimated `correction` relative to
+/// the increment), with a hint when it is held at round-off.
+fn not_converged(
+    step: &Step,
+    iterations: usize,
+    residual_met: bool,
+    relative: f64,
+    correction: f64,
+) -> Failure {
+    let hint = match (residual_met, relative, correction) {
+        (false, r, _) if r < ROUND_OFF => round_off_hint("residual", r),
+        (true, _, c) if c < ROUND_OFF => round_off_hint("displacement", c),
+        _ => String::new(),
+    };
+    let unmet = if residual_met {
+        format!(
+            "relative residual {relative:.3e} met, estimated correction \
+             {correction:.3e} > displacement_tolerance {:e}",
+            step.displacement_tolerance
+        )
+    } else {
+        format!(
+            "relative residual {relative:.3e} > residual_tolerance {:e}",
+            step.residual_tolerance
+        )
+    };
+    Failure::Diverged(format!(
+        "no convergence in {iterations} iteration{} ({unmet}){hint}",
+        if iterations == 1 { "" } else { "s" }
+    ))
 }
