@@ -165,8 +165,21 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<Mesh> {
     };
     // A byte-order mark, as some editors write: not part of the format.
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    let version_line = version(bytes).map_err(merr)?;
+    let names = parse_physical_names(bytes, path)?;
+    let msh = mshio::parse_msh_bytes(bytes)
+        .map_err(|e| merr(parse_error_message(&e, bytes, &version_line)))?;
+    let mut mesh = Mesh::default();
+    let tag_to_index = read_nodes(&msh, bytes, &mut mesh).map_err(merr)?;
+    mesh.groups = read_elements(&msh, &names, &tag_to_index, &mut mesh, path)?;
+    Ok(mesh)
+}
+
+/// The version line of a `.msh` file (its second line), or why the file cannot be read: not a
+/// Gmsh file, or not of format 4.1.
+fn version(bytes: &[u8]) -> std::result::Result<String, String> {
     if !bytes.starts_with(b"$MeshFormat") {
-        return Err(merr("not a Gmsh mesh file (no $MeshFormat header)".into()));
+        return Err("not a Gmsh mesh file (no $MeshFormat header)".into());
     }
     let version_line = bytes
         .split(|&b| b == b'\n')
@@ -174,37 +187,49 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<Mesh> {
         .map(|l| String::from_utf8_lossy(l).trim().to_string())
         .unwrap_or_default();
     if !version_line.starts_with("4.1") {
-        return Err(merr(format!(
+        return Err(format!(
             "only MSH format 4.1 is supported, found '{version_line}' (export with Mesh.MshFileVersion = 4.1)"
-        )));
+        ));
     }
-    let names = parse_physical_names(bytes, path)?;
-    let msh = mshio::parse_msh_bytes(bytes).map_err(|e| {
-        // mshio's message spans several lines and ends with a hex dump: keep
-        // the context chain on one line.
-        let text = e.to_string();
-        let text = text.split("Hex dump").next().unwrap_or_default();
-        // A cut-off file is the usual cause: say which section never ends.
-        let unfinished = ["$Entities", "$Nodes", "$Elements"].into_iter().find(|s| {
-            find(bytes, s.as_bytes()).is_some()
-                && find(bytes, format!("$End{}", &s[1..]).as_bytes()).is_none()
-        });
-        let hint = unfinished
-            .map(|s| format!(" (the file ends inside {s}: is it complete?)"))
-            .unwrap_or_default();
-        // Where the innermost parser stopped (its input is a slice of `bytes`).
-        let place = e
-            .backtrace
-            .first()
-            .and_then(|(rest, _)| place(bytes, rest, &version_line))
-            .unwrap_or_default();
-        merr(format!(
-            "parse error{place}: {}{hint}",
-            text.split_whitespace().collect::<Vec<_>>().join(" ")
-        ))
-    })?;
+    Ok(version_line)
+}
 
-    // Entity (dim, tag) -> physical tags.
+/// `mshio`'s parse error `e` on `bytes` as one line: its context chain without the hex dump, where
+/// the innermost parser stopped, and which section never ends when the file was cut off.
+fn parse_error_message(
+    e: &mshio::MshParserError<&[u8]>,
+    bytes: &[u8],
+    version_line: &str,
+) -> String {
+    // mshio's message spans several lines and ends with a hex dump: keep
+    // the context chain on one line.
+    let text = e.to_string();
+    let text = text.split("Hex dump").next().unwrap_or_default();
+    // A cut-off file is the usual cause: say which section never ends.
+    let unfinished = ["$Entities", "$Nodes", "$Elements"].into_iter().find(|s| {
+        find(bytes, s.as_bytes()).is_some()
+            && find(bytes, format!("$End{}", &s[1..]).as_bytes()).is_none()
+    });
+    let hint = unfinished
+        .map(|s| format!(" (the file ends inside {s}: is it complete?)"))
+        .unwrap_or_default();
+    // Where the innermost parser stopped (its input is a slice of `bytes`).
+    let place = e
+        .backtrace
+        .first()
+        .and_then(|(rest, _)| place(bytes, rest, version_line))
+        .unwrap_or_default();
+    format!(
+        "parse error{place}: {}{hint}",
+        text.split_whitespace().collect::<Vec<_>>().join(" ")
+    )
+}
+
+/// The parsed file's type.
+type MshFile = mshio::MshFile<u64, i32, f64>;
+
+/// The physical tags of each entity `(dim, tag)`.
+fn physical_tags_of_entities(msh: &MshFile) -> HashMap<(i32, i32), Vec<i32>> {
     let mut entity_phys: HashMap<(i32, i32), Vec<i32>> = HashMap::new();
     if let Some(ent) = &msh.data.entities {
         for p in &ent.points {
@@ -220,17 +245,24 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<Mesh> {
             entity_phys.insert((3, v.tag), v.physical_tags.clone());
         }
     }
+    entity_phys
+}
 
-    // Nodes.
-    let mut mesh = Mesh::default();
+/// The nodes of `msh` into `mesh` (coordinates and tags, the tags read from `bytes` when the file
+/// holds them; see the module documentation); returns each tag's index.
+fn read_nodes(
+    msh: &MshFile,
+    bytes: &[u8],
+    mesh: &mut Mesh,
+) -> std::result::Result<HashMap<u64, usize>, String> {
     let mut tag_to_index: HashMap<u64, usize> = HashMap::new();
     if let Some(nodes) = &msh.data.nodes {
         let total: usize = nodes.node_blocks.iter().map(|b| b.nodes.len()).sum();
         if usize::try_from(nodes.num_nodes).ok() != Some(total) {
-            return Err(merr(format!(
+            return Err(format!(
                 "the $Nodes header counts {} nodes but its blocks hold {total}",
                 nodes.num_nodes
-            )));
+            ));
         }
         let mut file_tags = crate::gmsh_nodes::node_tags(bytes)
             .filter(|t| t.len() == total)
@@ -261,10 +293,10 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<Mesh> {
             for (node, tag) in block.nodes.iter().zip(block_tags) {
                 let x = [node.x, node.y, node.z];
                 if let Some(fault) = coordinate_fault(&x) {
-                    return Err(merr(format!("node {tag} has {fault}")));
+                    return Err(format!("node {tag} has {fault}"));
                 }
                 if tag_to_index.insert(tag, mesh.nodes.len()).is_some() {
-                    return Err(merr(format!("node tag {tag} is defined twice")));
+                    return Err(format!("node tag {tag} is defined twice"));
                 }
                 mesh.nodes.push(x);
                 mesh.node_tags.push(tag);
@@ -272,10 +304,26 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<Mesh> {
         }
     }
     if mesh.nodes.is_empty() {
-        return Err(merr("the mesh has no nodes".into()));
+        return Err("the mesh has no nodes".into());
     }
+    Ok(tag_to_index)
+}
 
-    // Elements into groups keyed by (dim, physical tag).
+/// The elements of `msh` into `mesh` (those of physical groups; points and lines only give their
+/// nodes to their groups), and the groups keyed by `(dim, physical tag)`, named from `names` (by
+/// their tag otherwise), named groups without elements included.
+fn read_elements(
+    msh: &MshFile,
+    names: &HashMap<(i32, i32), String>,
+    tag_to_index: &HashMap<u64, usize>,
+    mesh: &mut Mesh,
+    path: &Path,
+) -> Result<Vec<Group>> {
+    let merr = |message: String| FemError::Mesh {
+        path: path.to_path_buf(),
+        message,
+    };
+    let entity_phys = physical_tags_of_entities(msh);
     let mut groups: BTreeMap<(i32, i32), Group> = BTreeMap::new();
     let group_name = |dim: i32, tag: i32| {
         names
@@ -389,7 +437,7 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<Mesh> {
         g.nodes.dedup();
     }
     // Named groups that have no elements still exist (empty).
-    for (&(dim, tag), name) in &names {
+    for (&(dim, tag), name) in names {
         groups.entry((dim, tag)).or_insert_with(|| Group {
             name: name.clone(),
             dim: usize::try_from(dim).unwrap_or(0),
@@ -397,6 +445,5 @@ pub fn parse_msh(bytes: &[u8], path: &Path) -> Result<Mesh> {
             nodes: Vec::new(),
         });
     }
-    mesh.groups = groups.into_values().collect();
-    Ok(mesh)
+    Ok(groups.into_values().collect())
 }
