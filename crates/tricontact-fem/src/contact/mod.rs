@@ -455,6 +455,153 @@ fn settle(st: &mut NodeState, was_active: bool, want: bool) -> bool {
     want
 }
 
+/// One slave node's evaluation: its facet, the facet's nodes and the node–facet geometry (`None`:
+/// no facet within reach).
+type Evaluation<'a> = Option<&'a (u32, [usize; 3], Gap)>;
+
+/// Where a node's terms go: the residual, the contact force, the tangent triplets.
+type Out<'a> = (
+    &'a mut [f64],
+    &'a mut [f64],
+    &'a mut Vec<(usize, usize, f64)>,
+);
+
+/// Records the facet of `eval` in the node's state, counting a change of facet: back on the facet
+/// it left last time (A → B → A, a two-cycle) or after [`MAX_SWITCHES`] changes the node's facet
+/// is frozen for the rest of the increment. Returns whether the facet changed.
+fn follow_facet(st: &mut NodeState, eval: Evaluation<'_>) -> bool {
+    let facet = eval.map(|e| e.0);
+    let moved = facet != st.facet;
+    if moved && st.facet.is_some() && eval.is_some() {
+        st.facet_switches += 1;
+        let returned = facet == st.left_facet;
+        if returned || st.facet_switches > MAX_SWITCHES {
+            st.facet_frozen = true;
+        }
+        st.left_facet = st.facet;
+    }
+    match eval {
+        Some((f, _, g)) => {
+            let w = g.normal();
+            st.facet = Some(*f);
+            st.shape = g.shape();
+            st.normal = [w[0], w[1], w[2]];
+            st.gap = g.gap();
+        }
+        None => {
+            st.facet = None;
+            st.gap = 0.0;
+        }
+    }
+    moved
+}
+
+/// A kernel failure as a message.
+fn geometry(e: tricontact::GeometryError) -> String {
+    format!("contact: {e}")
+}
+
+/// Penalty contact of slave node `s`: closed when the penalty wants it (see [`settle`]), then its
+/// terms `α P` with their tangent.
+fn penalty_node(
+    st: &mut NodeState,
+    was_active: bool,
+    eval: Evaluation<'_>,
+    alpha: f64,
+    s: usize,
+    (residual, force, triplets): Out<'_>,
+) -> Result<(), String> {
+    let want = eval.is_some_and(|(_, _, g)| penalty::wants_closed(g));
+    let act = settle(st, was_active, want) && eval.is_some();
+    st.active = false;
+    st.lambda = 0.0;
+    if let Some((_, fnodes, g)) = eval
+        && act
+    {
+        let (r, k) = penalty::penalty_terms(g, alpha).map_err(geometry)?;
+        st.active = true;
+        st.lambda = alpha * g.gap();
+        let nodes = [fnodes[0], fnodes[1], fnodes[2], s];
+        scatter(nodes, &r, &k, residual, force, triplets);
+    }
+    Ok(())
+}
+
+/// Augmented-Lagrangian contact of slave node `s`: closed when its multiplier estimate
+/// `λ̂ = λ_k + α P` wants it, then its terms with their tangent.
+fn augmented_node(
+    st: &mut NodeState,
+    was_active: bool,
+    eval: Evaluation<'_>,
+    alpha: f64,
+    s: usize,
+    (residual, force, triplets): Out<'_>,
+) -> Result<(), String> {
+    let lambda_hat = match eval {
+        Some((_, _, g)) => Some(augmented::lambda_hat(g, st.lambda_k, alpha).map_err(geometry)?),
+        None => None,
+    };
+    let want = eval
+        .zip(lambda_hat)
+        .is_some_and(|((_, _, g), lh)| augmented::wants_closed(g, lh));
+    let act = settle(st, was_active, want) && eval.is_some();
+    st.active = false;
+    st.lambda = 0.0;
+    if let (Some((_, fnodes, g)), Some(lh)) = (eval, lambda_hat)
+        && act
+    {
+        let (r, k) = augmented::augmented_terms(g, st.lambda_k, alpha).map_err(geometry)?;
+        st.active = true;
+        st.lambda = lh;
+        let nodes = [fnodes[0], fnodes[1], fnodes[2], s];
+        scatter(nodes, &r, &k, residual, force, triplets);
+    }
+    Ok(())
+}
+
+/// Lagrange-multiplier contact of slave node `s` whose multiplier is the unknown `ldof` (value in
+/// `u`): the active block (`c = P = 0`) or the inactive one (`λ = 0`), and the coupling terms.
+fn multiplier_node(
+    st: &mut NodeState,
+    was_active: bool,
+    eval: Evaluation<'_>,
+    alpha: f64,
+    (s, ldof): (usize, usize),
+    u: &[f64],
+    (residual, force, triplets): Out<'_>,
+) -> Result<(), String> {
+    let lambda = u[ldof];
+    let want = eval.is_some_and(|(_, _, g)| multiplier::wants_active(g.gap(), lambda, alpha));
+    let act = settle(st, was_active, want) && eval.is_some();
+    st.active = act;
+    st.lambda = if act { lambda } else { 0.0 };
+    let block = match eval {
+        Some((_, _, g)) if act => multiplier::active_block(g, lambda).map_err(geometry)?,
+        _ => multiplier::inactive_block(lambda, alpha),
+    };
+    if let Some((_, fnodes, _)) = eval
+        && act
+    {
+        let nodes = [fnodes[0], fnodes[1], fnodes[2], s];
+        scatter(
+            nodes,
+            &block.residual_u,
+            &block.k_uu,
+            residual,
+            force,
+            triplets,
+        );
+        for i in 0..12 {
+            let d = 3 * nodes[i / 3] + i % 3;
+            triplets.push((d, ldof, block.k_ulambda[i]));
+            triplets.push((ldof, d, block.k_ulambda[i]));
+        }
+    }
+    residual[ldof] += block.residual_lambda;
+    triplets.push((ldof, ldof, block.k_lambdalambda));
+    Ok(())
+}
+
 impl ExtraTerms for ContactTerms {
     fn num_extra(&self) -> usize {
         self.n_extra
@@ -544,124 +691,26 @@ impl ExtraTerms for ContactTerms {
                     let eval = self.evaluate((p, q, j), &x, u, bvh.as_ref());
                     let st = &mut self.trial[p][q][j];
                     let was_active = st.active;
-                    if eval.as_ref().map(|e| e.0) != st.facet {
-                        moved += 1;
-                        if st.facet.is_some() && eval.is_some() {
-                            st.facet_switches += 1;
-                            // Back on the facet it left last time (A → B → A): a two-cycle.
-                            let returned = eval.as_ref().map(|e| e.0) == st.left_facet;
-                            if returned || st.facet_switches > MAX_SWITCHES {
-                                st.facet_frozen = true;
-                            }
-                            st.left_facet = st.facet;
-                        }
-                    }
+                    moved += usize::from(follow_facet(st, eval.as_ref()));
                     if st.facet_frozen {
                         frozen += 1;
                     }
-                    match &eval {
-                        Some((f, _, g)) => {
-                            let w = g.normal();
-                            st.facet = Some(*f);
-                            st.shape = g.shape();
-                            st.normal = [w[0], w[1], w[2]];
-                            st.gap = g.gap();
-                        }
-                        None => {
-                            st.facet = None;
-                            st.gap = 0.0;
-                        }
-                    }
-                    let geometry = |e: tricontact::GeometryError| format!("contact: {e}");
+                    let out = (&mut *residual, &mut force[..], &mut *triplets);
                     match method {
                         ContactMethod::Penalty => {
-                            let want = eval
-                                .as_ref()
-                                .is_some_and(|(_, _, g)| penalty::wants_closed(g));
-                            let act = settle(st, was_active, want) && eval.is_some();
-                            if st.held {
-                                frozen += 1;
-                            }
-                            st.active = false;
-                            st.lambda = 0.0;
-                            if let Some((_, fnodes, g)) = &eval
-                                && act
-                            {
-                                let (r, k) = penalty::penalty_terms(g, alpha).map_err(geometry)?;
-                                st.active = true;
-                                st.lambda = alpha * g.gap();
-                                let nodes = [fnodes[0], fnodes[1], fnodes[2], s];
-                                scatter(nodes, &r, &k, residual, &mut force, triplets);
-                            }
+                            penalty_node(st, was_active, eval.as_ref(), alpha, s, out)?;
                         }
                         ContactMethod::Augmented => {
-                            let lambda_hat = match &eval {
-                                Some((_, _, g)) => Some(
-                                    augmented::lambda_hat(g, st.lambda_k, alpha)
-                                        .map_err(geometry)?,
-                                ),
-                                None => None,
-                            };
-                            let want = eval
-                                .as_ref()
-                                .zip(lambda_hat)
-                                .is_some_and(|((_, _, g), lh)| augmented::wants_closed(g, lh));
-                            let act = settle(st, was_active, want) && eval.is_some();
-                            if st.held {
-                                frozen += 1;
-                            }
-                            st.active = false;
-                            st.lambda = 0.0;
-                            if let (Some((_, fnodes, g)), Some(lh)) = (&eval, lambda_hat)
-                                && act
-                            {
-                                let (r, k) = augmented::augmented_terms(g, st.lambda_k, alpha)
-                                    .map_err(geometry)?;
-                                st.active = true;
-                                st.lambda = lh;
-                                let nodes = [fnodes[0], fnodes[1], fnodes[2], s];
-                                scatter(nodes, &r, &k, residual, &mut force, triplets);
-                            }
+                            augmented_node(st, was_active, eval.as_ref(), alpha, s, out)?;
                         }
                         ContactMethod::Multiplier => {
                             let ldof = n_nodal + self.offsets[p] + j;
-                            let lambda = u[ldof];
-                            let want = eval.as_ref().is_some_and(|(_, _, g)| {
-                                multiplier::wants_active(g.gap(), lambda, alpha)
-                            });
-                            let act = settle(st, was_active, want) && eval.is_some();
-                            if st.held {
-                                frozen += 1;
-                            }
-                            st.active = act;
-                            st.lambda = if act { lambda } else { 0.0 };
-                            let block = match &eval {
-                                Some((_, _, g)) if act => {
-                                    multiplier::active_block(g, lambda).map_err(geometry)?
-                                }
-                                _ => multiplier::inactive_block(lambda, alpha),
-                            };
-                            if let Some((_, fnodes, _)) = &eval
-                                && act
-                            {
-                                let nodes = [fnodes[0], fnodes[1], fnodes[2], s];
-                                scatter(
-                                    nodes,
-                                    &block.residual_u,
-                                    &block.k_uu,
-                                    residual,
-                                    &mut force,
-                                    triplets,
-                                );
-                                for i in 0..12 {
-                                    let d = 3 * nodes[i / 3] + i % 3;
-                                    triplets.push((d, ldof, block.k_ulambda[i]));
-                                    triplets.push((ldof, d, block.k_ulambda[i]));
-                                }
-                            }
-                            residual[ldof] += block.residual_lambda;
-                            triplets.push((ldof, ldof, block.k_lambdalambda));
+                            let node = (s, ldof);
+                            multiplier_node(st, was_active, eval.as_ref(), alpha, node, u, out)?;
                         }
+                    }
+                    if st.held {
+                        frozen += 1;
                     }
                     if st.active {
                         active_count += 1;
