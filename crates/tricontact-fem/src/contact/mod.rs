@@ -509,22 +509,13 @@ fn penalty_node(
     eval: Evaluation<'_>,
     alpha: f64,
     s: usize,
-    (residual, force, triplets): Out<'_>,
+    out: Out<'_>,
 ) -> Result<(), String> {
     let want = eval.is_some_and(|(_, _, g)| penalty::wants_closed(g));
-    let act = settle(st, was_active, want) && eval.is_some();
-    st.active = false;
-    st.lambda = 0.0;
-    if let Some((_, fnodes, g)) = eval
-        && act
-    {
+    closed_terms(st, was_active, want, eval, s, out, |g, _| {
         let (r, k) = penalty::penalty_terms(g, alpha).map_err(geometry)?;
-        st.active = true;
-        st.lambda = alpha * g.gap();
-        let nodes = [fnodes[0], fnodes[1], fnodes[2], s];
-        scatter(nodes, &r, &k, residual, force, triplets);
-    }
-    Ok(())
+        Ok((r, k, alpha * g.gap()))
+    })
 }
 
 /// Augmented-Lagrangian contact of slave node `s`: closed when its multiplier estimate
@@ -535,7 +526,7 @@ fn augmented_node(
     eval: Evaluation<'_>,
     alpha: f64,
     s: usize,
-    (residual, force, triplets): Out<'_>,
+    out: Out<'_>,
 ) -> Result<(), String> {
     let lambda_hat = match eval {
         Some((_, _, g)) => Some(augmented::lambda_hat(g, st.lambda_k, alpha).map_err(geometry)?),
@@ -544,15 +535,33 @@ fn augmented_node(
     let want = eval
         .zip(lambda_hat)
         .is_some_and(|((_, _, g), lh)| augmented::wants_closed(g, lh));
+    closed_terms(st, was_active, want, eval, s, out, |g, lambda_k| {
+        let (r, k) = augmented::augmented_terms(g, lambda_k, alpha).map_err(geometry)?;
+        Ok((r, k, lambda_hat.unwrap_or(0.0)))
+    })
+}
+
+/// The status of a node of penalty or augmented contact from the status it `want`s (see
+/// [`settle`]); when closed, its residual, tangent and multiplier from `terms(gap, λ_k)`, scattered
+/// into `out`. Open, its multiplier is zero.
+fn closed_terms(
+    st: &mut NodeState,
+    was_active: bool,
+    want: bool,
+    eval: Evaluation<'_>,
+    s: usize,
+    (residual, force, triplets): Out<'_>,
+    terms: impl FnOnce(&Gap, f64) -> Result<(tricontact::Vec12, tricontact::Mat12, f64), String>,
+) -> Result<(), String> {
     let act = settle(st, was_active, want) && eval.is_some();
     st.active = false;
     st.lambda = 0.0;
-    if let (Some((_, fnodes, g)), Some(lh)) = (eval, lambda_hat)
+    if let Some((_, fnodes, g)) = eval
         && act
     {
-        let (r, k) = augmented::augmented_terms(g, st.lambda_k, alpha).map_err(geometry)?;
+        let (r, k, lambda) = terms(g, st.lambda_k)?;
         st.active = true;
-        st.lambda = lh;
+        st.lambda = lambda;
         let nodes = [fnodes[0], fnodes[1], fnodes[2], s];
         scatter(nodes, &r, &k, residual, force, triplets);
     }
