@@ -235,6 +235,54 @@ fn increment_line(info: &IncrementInfo<'_>, previous: f64) -> String {
     )
 }
 
+/// The verbose log of a converged increment that started at load factor `previous`: the attempts
+/// cut back before it, its line, and the extra terms' note of each iteration.
+fn verbose_lines(info: &IncrementInfo<'_>, previous: f64) -> Vec<String> {
+    let mut lines: Vec<String> = info
+        .attempts
+        .iter()
+        .map(|&(t, ref why)| {
+            format!(
+                "step {} '{}' attempt t = {} cut back: {why}",
+                info.step + 1,
+                info.step_name,
+                load_factor_text(t, t - previous, 4)
+            )
+        })
+        .collect();
+    lines.push(increment_line(info, previous));
+    for (k, note) in info.notes.iter().enumerate() {
+        lines.push(format!("    iteration {k}: {note}"));
+    }
+    lines
+}
+
+/// The verbose log of the increment a run failed on: each attempt and why it failed (none for
+/// other errors).
+fn failed_attempts(an: &Analysis, e: &FemError) -> Vec<String> {
+    let FemError::NotConverged {
+        step,
+        attempts,
+        load_factor,
+        ..
+    } = e
+    else {
+        return Vec::new();
+    };
+    let number = an
+        .steps
+        .iter()
+        .position(|s| s.name == *step)
+        .map_or(0, |i| i + 1);
+    attempts
+        .iter()
+        .map(|(t, why)| {
+            let t = load_factor_text(*t, t - load_factor, 4);
+            format!("step {number} '{step}' attempt t = {t} failed: {why}")
+        })
+        .collect()
+}
+
 fn run(
     model_path: &Path,
     output: Option<PathBuf>,
@@ -286,23 +334,7 @@ fn run(
         let previous = if info.step == last.0 { last.1 } else { 0.0 };
         last = (info.step, info.load_factor);
         if verbose {
-            let mut lines: Vec<String> = info
-                .attempts
-                .iter()
-                .map(|&(t, ref why)| {
-                    format!(
-                        "step {} '{}' attempt t = {} cut back: {why}",
-                        info.step + 1,
-                        info.step_name,
-                        load_factor_text(t, t - previous, 4)
-                    )
-                })
-                .collect();
-            lines.push(increment_line(info, previous));
-            for (k, note) in info.notes.iter().enumerate() {
-                lines.push(format!("    iteration {k}: {note}"));
-            }
-            for line in lines {
+            for line in verbose_lines(info, previous) {
                 if pb.is_hidden() {
                     say!("{line}");
                 } else {
@@ -323,24 +355,9 @@ fn run(
         }
     });
     let summary = summary.and_then(|s| flushed.map(|()| s));
-    if let (
-        Err(FemError::NotConverged {
-            step,
-            attempts,
-            load_factor,
-            ..
-        }),
-        true,
-    ) = (&summary, verbose)
-    {
-        let number = an
-            .steps
-            .iter()
-            .position(|s| s.name == *step)
-            .map_or(0, |i| i + 1);
-        for (t, why) in attempts {
-            let t = load_factor_text(*t, t - load_factor, 4);
-            say!("step {number} '{step}' attempt t = {t} failed: {why}");
+    if let (Err(e), true) = (&summary, verbose) {
+        for line in failed_attempts(&an, e) {
+            say!("{line}");
         }
     }
     let summary = summary?;
