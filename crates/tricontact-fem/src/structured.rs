@@ -23,134 +23,17 @@ fn node_id(n: [usize; 3], i: usize, j: usize, k: usize) -> usize {
 #[must_use]
 pub fn box_mesh(size: [f64; 3], n: [usize; 3], kind: ElementKind) -> Mesh {
     assert!(kind.dim() == 3, "box_mesh needs a volume element kind");
-    let mut mesh = Mesh::default();
-    for k in 0..=n[2] {
-        for j in 0..=n[1] {
-            for i in 0..=n[0] {
-                mesh.nodes.push([
-                    size[0] * i as f64 / n[0] as f64,
-                    size[1] * j as f64 / n[1] as f64,
-                    size[2] * k as f64 / n[2] as f64,
-                ]);
-            }
-        }
+    let mut nodes = grid_nodes(size, n);
+    let mut vols = bricks(n, kind);
+    orient_tets(&nodes, &mut vols);
+    let mut sides = boundary_faces(&nodes, size, &vols, kind);
+    if kind == ElementKind::Tet10 {
+        add_mid_nodes(&mut nodes, &mut vols, &mut sides);
     }
-    let mut vols: Vec<Vec<usize>> = Vec::new();
-    for k in 0..n[2] {
-        for j in 0..n[1] {
-            for i in 0..n[0] {
-                let c = |di: usize, dj: usize, dk: usize| node_id(n, i + di, j + dj, k + dk);
-                let hex = [
-                    c(0, 0, 0),
-                    c(1, 0, 0),
-                    c(1, 1, 0),
-                    c(0, 1, 0),
-                    c(0, 0, 1),
-                    c(1, 0, 1),
-                    c(1, 1, 1),
-                    c(0, 1, 1),
-                ];
-                if kind == ElementKind::Hex8 {
-                    vols.push(hex.to_vec());
-                } else {
-                    // Cube vertex by bits (x = 1, y = 2, z = 4).
-                    let v = |b: usize| c(b & 1, (b >> 1) & 1, (b >> 2) & 1);
-                    for p in [
-                        [0, 1, 2],
-                        [0, 2, 1],
-                        [1, 0, 2],
-                        [1, 2, 0],
-                        [2, 0, 1],
-                        [2, 1, 0],
-                    ] {
-                        let b1 = 1 << p[0];
-                        let b2 = b1 | (1 << p[1]);
-                        vols.push(vec![v(0), v(b1), v(b2), v(7)]);
-                    }
-                }
-            }
-        }
-    }
-    // Orient tets positively.
-    for t in vols.iter_mut().filter(|t| t.len() == 4) {
-        let x = |a: usize| mesh.nodes[t[a]];
-        let d = |a: usize| {
-            let (p, o) = (x(a), x(0));
-            [p[0] - o[0], p[1] - o[1], p[2] - o[2]]
-        };
-        let (a, b, c) = (d(1), d(2), d(3));
-        let vol = a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-            + a[2] * (b[0] * c[1] - b[1] * c[0]);
-        if vol < 0.0 {
-            t.swap(1, 2);
-        }
-    }
-    // Boundary faces per side, taken from the volume elements.
-    let on_side = |p: [f64; 3], side: usize| {
-        let axis = side / 2;
-        let target = if side.is_multiple_of(2) {
-            0.0
-        } else {
-            size[axis]
-        };
-        (p[axis] - target).abs() <= 1e-12 * size[axis]
+    let mut mesh = Mesh {
+        nodes,
+        ..Mesh::default()
     };
-    let local_faces: Vec<Vec<usize>> = if kind == ElementKind::Hex8 {
-        vec![
-            vec![0, 3, 2, 1],
-            vec![4, 5, 6, 7],
-            vec![0, 1, 5, 4],
-            vec![1, 2, 6, 5],
-            vec![2, 3, 7, 6],
-            vec![3, 0, 4, 7],
-        ]
-    } else {
-        vec![vec![0, 2, 1], vec![0, 1, 3], vec![1, 2, 3], vec![0, 3, 2]]
-    };
-    let mut sides: Vec<Vec<Vec<usize>>> = vec![Vec::new(); 6];
-    for v in &vols {
-        for lf in &local_faces {
-            let f: Vec<usize> = lf.iter().map(|&a| v[a]).collect();
-            for (s, side) in sides.iter_mut().enumerate() {
-                if f.iter().all(|&a| on_side(mesh.nodes[a], s)) {
-                    side.push(f.clone());
-                }
-            }
-        }
-    }
-    // Tet10: mid-edge nodes (Gmsh edge order), shared through an edge map.
-    let mut edge_nodes: HashMap<(usize, usize), usize> = HashMap::new();
-    let mut mid = |a: usize, b: usize, nodes: &mut Vec<[f64; 3]>| {
-        let key = (a.min(b), a.max(b));
-        *edge_nodes.entry(key).or_insert_with(|| {
-            let (p, q) = (nodes[a], nodes[b]);
-            nodes.push([
-                (p[0] + q[0]) / 2.0,
-                (p[1] + q[1]) / 2.0,
-                (p[2] + q[2]) / 2.0,
-            ]);
-            nodes.len() - 1
-        })
-    };
-    let quadratic = kind == ElementKind::Tet10;
-    if quadratic {
-        for t in &mut vols {
-            let c = [t[0], t[1], t[2], t[3]];
-            for [a, b] in crate::tet10::EDGES {
-                let m = mid(c[a], c[b], &mut mesh.nodes);
-                t.push(m);
-            }
-        }
-        for side in &mut sides {
-            for f in side.iter_mut() {
-                let c = [f[0], f[1], f[2]];
-                for [a, b] in [[0, 1], [1, 2], [2, 0]] {
-                    let m = mid(c[a], c[b], &mut mesh.nodes);
-                    f.push(m);
-                }
-            }
-        }
-    }
     let face_kind = match kind {
         ElementKind::Hex8 => ElementKind::Quad4,
         ElementKind::Tet4 => ElementKind::Tri3,
@@ -198,6 +81,163 @@ pub fn box_mesh(size: [f64; 3], n: [usize; 3], kind: ElementKind) -> Mesh {
     }
     mesh.groups = groups;
     mesh
+}
+
+/// The `(n₀+1)(n₁+1)(n₂+1)` grid nodes, `x` fastest.
+fn grid_nodes(size: [f64; 3], n: [usize; 3]) -> Vec<[f64; 3]> {
+    let mut nodes = Vec::with_capacity((n[0] + 1) * (n[1] + 1) * (n[2] + 1));
+    for k in 0..=n[2] {
+        for j in 0..=n[1] {
+            for i in 0..=n[0] {
+                nodes.push([
+                    size[0] * i as f64 / n[0] as f64,
+                    size[1] * j as f64 / n[1] as f64,
+                    size[2] * k as f64 / n[2] as f64,
+                ]);
+            }
+        }
+    }
+    nodes
+}
+
+/// The volume elements brick by brick: one hex8 each, or six tets of the Kuhn split (corner
+/// nodes only; see the module documentation).
+fn bricks(n: [usize; 3], kind: ElementKind) -> Vec<Vec<usize>> {
+    let mut vols: Vec<Vec<usize>> = Vec::new();
+    for k in 0..n[2] {
+        for j in 0..n[1] {
+            for i in 0..n[0] {
+                let c = |di: usize, dj: usize, dk: usize| node_id(n, i + di, j + dj, k + dk);
+                let hex = [
+                    c(0, 0, 0),
+                    c(1, 0, 0),
+                    c(1, 1, 0),
+                    c(0, 1, 0),
+                    c(0, 0, 1),
+                    c(1, 0, 1),
+                    c(1, 1, 1),
+                    c(0, 1, 1),
+                ];
+                if kind == ElementKind::Hex8 {
+                    vols.push(hex.to_vec());
+                } else {
+                    // Cube vertex by bits (x = 1, y = 2, z = 4).
+                    let v = |b: usize| c(b & 1, (b >> 1) & 1, (b >> 2) & 1);
+                    for p in [
+                        [0, 1, 2],
+                        [0, 2, 1],
+                        [1, 0, 2],
+                        [1, 2, 0],
+                        [2, 0, 1],
+                        [2, 1, 0],
+                    ] {
+                        let b1 = 1 << p[0];
+                        let b2 = b1 | (1 << p[1]);
+                        vols.push(vec![v(0), v(b1), v(b2), v(7)]);
+                    }
+                }
+            }
+        }
+    }
+    vols
+}
+
+/// Swaps two nodes of every tet with a negative volume.
+fn orient_tets(nodes: &[[f64; 3]], vols: &mut [Vec<usize>]) {
+    for t in vols.iter_mut().filter(|t| t.len() == 4) {
+        let x = |a: usize| nodes[t[a]];
+        let d = |a: usize| {
+            let (p, o) = (x(a), x(0));
+            [p[0] - o[0], p[1] - o[1], p[2] - o[2]]
+        };
+        let (a, b, c) = (d(1), d(2), d(3));
+        let vol = a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+            + a[2] * (b[0] * c[1] - b[1] * c[0]);
+        if vol < 0.0 {
+            t.swap(1, 2);
+        }
+    }
+}
+
+/// The boundary faces of each side `xmin, xmax, ymin, ymax, zmin, zmax`, taken from the volume
+/// elements (corner nodes only).
+fn boundary_faces(
+    nodes: &[[f64; 3]],
+    size: [f64; 3],
+    vols: &[Vec<usize>],
+    kind: ElementKind,
+) -> Vec<Vec<Vec<usize>>> {
+    let on_side = |p: [f64; 3], side: usize| {
+        let axis = side / 2;
+        let target = if side.is_multiple_of(2) {
+            0.0
+        } else {
+            size[axis]
+        };
+        (p[axis] - target).abs() <= 1e-12 * size[axis]
+    };
+    let local_faces: Vec<Vec<usize>> = if kind == ElementKind::Hex8 {
+        vec![
+            vec![0, 3, 2, 1],
+            vec![4, 5, 6, 7],
+            vec![0, 1, 5, 4],
+            vec![1, 2, 6, 5],
+            vec![2, 3, 7, 6],
+            vec![3, 0, 4, 7],
+        ]
+    } else {
+        vec![vec![0, 2, 1], vec![0, 1, 3], vec![1, 2, 3], vec![0, 3, 2]]
+    };
+    let mut sides: Vec<Vec<Vec<usize>>> = vec![Vec::new(); 6];
+    for v in vols {
+        for lf in &local_faces {
+            let f: Vec<usize> = lf.iter().map(|&a| v[a]).collect();
+            for (s, side) in sides.iter_mut().enumerate() {
+                if f.iter().all(|&a| on_side(nodes[a], s)) {
+                    side.push(f.clone());
+                }
+            }
+        }
+    }
+    sides
+}
+
+/// Tet10: mid-edge nodes (Gmsh edge order) appended to `nodes`, shared through an edge map, and
+/// added to the tets and to the side faces (tri6).
+fn add_mid_nodes(
+    nodes: &mut Vec<[f64; 3]>,
+    vols: &mut [Vec<usize>],
+    sides: &mut [Vec<Vec<usize>>],
+) {
+    let mut edge_nodes: HashMap<(usize, usize), usize> = HashMap::new();
+    let mut mid = |a: usize, b: usize, nodes: &mut Vec<[f64; 3]>| {
+        let key = (a.min(b), a.max(b));
+        *edge_nodes.entry(key).or_insert_with(|| {
+            let (p, q) = (nodes[a], nodes[b]);
+            nodes.push([
+                (p[0] + q[0]) / 2.0,
+                (p[1] + q[1]) / 2.0,
+                (p[2] + q[2]) / 2.0,
+            ]);
+            nodes.len() - 1
+        })
+    };
+    for t in vols.iter_mut() {
+        let c = [t[0], t[1], t[2], t[3]];
+        for [a, b] in crate::tet10::EDGES {
+            let m = mid(c[a], c[b], nodes);
+            t.push(m);
+        }
+    }
+    for side in sides.iter_mut() {
+        for f in side.iter_mut() {
+            let c = [f[0], f[1], f[2]];
+            for [a, b] in [[0, 1], [1, 2], [2, 0]] {
+                let m = mid(c[a], c[b], nodes);
+                f.push(m);
+            }
+        }
+    }
 }
 
 /// Two meshes in one: node and element indices of `upper` shifted, its node coordinates moved
