@@ -28,6 +28,7 @@
 //!   have either sign.
 
 use crate::analysis::Analysis;
+use crate::contact::ContactPair;
 use crate::driver::IncrementInfo;
 use crate::error::{FemError, Result};
 use crate::model::HertzDef;
@@ -169,38 +170,7 @@ impl HertzSetup {
         let mut problem = |key: &str, message: String| {
             problems.push(format!("{}[hertz] {message}", at(key)));
         };
-        let names: Vec<&str> = an.contacts.iter().map(|p| p.name.as_str()).collect();
-        let pair = match &def.contact {
-            Some(name) => {
-                let pair = an.contacts.iter().find(|p| &p.name == name);
-                if pair.is_none() {
-                    problem(
-                        "contact",
-                        format!("contact: no pair '{name}' (pairs: {})", names.join(", ")),
-                    );
-                }
-                pair
-            }
-            None if an.contacts.len() == 1 => Some(&an.contacts[0]),
-            None if an.contacts.is_empty() => {
-                problem(
-                    "",
-                    "needs a [[contact]] pair (the sphere as slave, the flat as master)".into(),
-                );
-                None
-            }
-            None => {
-                problem(
-                    "",
-                    format!(
-                        "contact: name the pair, the model has {} (pairs: {})",
-                        an.contacts.len(),
-                        names.join(", ")
-                    ),
-                );
-                None
-            }
-        };
+        let pair = chosen_pair(def, an, &mut problem);
         let group = match an.mesh.lookup(&def.loaded, None) {
             Ok(Some(g)) => Some(g),
             Ok(None) => {
@@ -230,64 +200,7 @@ impl HertzSetup {
             (None, None) => None,
         };
         let norm = def.axis[0].hypot(def.axis[1]).hypot(def.axis[2]);
-        let positive = |x: f64| x > 0.0 && x.is_finite();
-        let centre_finite = def.centre.iter().all(|c| c.is_finite());
-        if !centre_finite {
-            problem(
-                "centre",
-                format!("centre must be three finite numbers (got {:?})", def.centre),
-            );
-        }
-        if !positive(def.radius) {
-            problem(
-                "radius",
-                format!("radius must be finite and > 0 (got {})", def.radius),
-            );
-        }
-        // A modulus taken from the slave body is that of a valid material, or of one reported
-        // invalid with its own key: only a given one is checked here.
-        if let Some(m) = def.modulus
-            && !positive(m)
-        {
-            problem(
-                "modulus",
-                format!("modulus must be finite and > 0 (got {m})"),
-            );
-        }
-        if !positive(norm) {
-            problem(
-                "axis",
-                format!("axis must be finite and not zero (got {:?})", def.axis),
-            );
-        }
-        if def.symmetry == 0 {
-            problem("symmetry", "symmetry must be ≥ 1 (got 0)".into());
-        }
-        // A unit slip (metres for millimetres, or worse) shows as a centre or radius far outside
-        // the model; at 10³⁰⁰ the distances from the axis overflowed.
-        let (low, high) = an.mesh.bounding_box();
-        let size = an.mesh.size();
-        let outside = (0..3)
-            .map(|i| (low[i] - def.centre[i]).max(def.centre[i] - high[i]))
-            .fold(0.0, f64::max);
-        if centre_finite && outside > FAR * size {
-            problem(
-                "centre",
-                format!(
-                    "centre {:?} is more than {FAR:e} model sizes ({size:e}) from the mesh: is it in the mesh's units?",
-                    def.centre
-                ),
-            );
-        }
-        if def.radius.is_finite() && def.radius > FAR * size {
-            problem(
-                "radius",
-                format!(
-                    "radius {:e} exceeds {FAR:e} model sizes ({size:e}): is it in the mesh's units?",
-                    def.radius
-                ),
-            );
-        }
+        check_values(def, an, norm, &mut problem);
         // Taken from the slave body, it is not > 0 only when that body's material is invalid
         // (a problem of its own): say so rather than quote a modulus the user never gave.
         if def.modulus.is_none() && modulus.is_some_and(|m| !positive(m)) {
@@ -376,6 +289,113 @@ impl HertzSetup {
             .map(|i| (d[i] - along * self.axis[i]).powi(2))
             .sum::<f64>()
             .sqrt()
+    }
+}
+
+/// The contact pair the table names, or the model's only one; otherwise a `problem`.
+fn chosen_pair<'a>(
+    def: &HertzDef,
+    an: &'a Analysis,
+    problem: &mut dyn FnMut(&str, String),
+) -> Option<&'a ContactPair> {
+    let names: Vec<&str> = an.contacts.iter().map(|p| p.name.as_str()).collect();
+    match &def.contact {
+        Some(name) => {
+            let pair = an.contacts.iter().find(|p| &p.name == name);
+            if pair.is_none() {
+                problem(
+                    "contact",
+                    format!("contact: no pair '{name}' (pairs: {})", names.join(", ")),
+                );
+            }
+            pair
+        }
+        None if an.contacts.len() == 1 => Some(&an.contacts[0]),
+        None if an.contacts.is_empty() => {
+            problem(
+                "",
+                "needs a [[contact]] pair (the sphere as slave, the flat as master)".into(),
+            );
+            None
+        }
+        None => {
+            problem(
+                "",
+                format!(
+                    "contact: name the pair, the model has {} (pairs: {})",
+                    an.contacts.len(),
+                    names.join(", ")
+                ),
+            );
+            None
+        }
+    }
+}
+
+/// `x` is finite and positive.
+fn positive(x: f64) -> bool {
+    x > 0.0 && x.is_finite()
+}
+
+/// The table's own values (`norm` that of its axis): finite and positive where they must be, and
+/// the centre and radius within [`FAR`] model sizes of the mesh (a unit slip otherwise).
+fn check_values(def: &HertzDef, an: &Analysis, norm: f64, problem: &mut dyn FnMut(&str, String)) {
+    let centre_finite = def.centre.iter().all(|c| c.is_finite());
+    if !centre_finite {
+        problem(
+            "centre",
+            format!("centre must be three finite numbers (got {:?})", def.centre),
+        );
+    }
+    if !positive(def.radius) {
+        problem(
+            "radius",
+            format!("radius must be finite and > 0 (got {})", def.radius),
+        );
+    }
+    // A modulus taken from the slave body is that of a valid material, or of one reported
+    // invalid with its own key: only a given one is checked here.
+    if let Some(m) = def.modulus
+        && !positive(m)
+    {
+        problem(
+            "modulus",
+            format!("modulus must be finite and > 0 (got {m})"),
+        );
+    }
+    if !positive(norm) {
+        problem(
+            "axis",
+            format!("axis must be finite and not zero (got {:?})", def.axis),
+        );
+    }
+    if def.symmetry == 0 {
+        problem("symmetry", "symmetry must be ≥ 1 (got 0)".into());
+    }
+    // A unit slip (metres for millimetres, or worse) shows as a centre or radius far outside
+    // the model; at 10³⁰⁰ the distances from the axis overflowed.
+    let (low, high) = an.mesh.bounding_box();
+    let size = an.mesh.size();
+    let outside = (0..3)
+        .map(|i| (low[i] - def.centre[i]).max(def.centre[i] - high[i]))
+        .fold(0.0, f64::max);
+    if centre_finite && outside > FAR * size {
+        problem(
+            "centre",
+            format!(
+                "centre {:?} is more than {FAR:e} model sizes ({size:e}) from the mesh: is it in the mesh's units?",
+                def.centre
+            ),
+        );
+    }
+    if def.radius.is_finite() && def.radius > FAR * size {
+        problem(
+            "radius",
+            format!(
+                "radius {:e} exceeds {FAR:e} model sizes ({size:e}): is it in the mesh's units?",
+                def.radius
+            ),
+        );
     }
 }
 
