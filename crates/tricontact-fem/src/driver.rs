@@ -25,7 +25,7 @@
 //! The first increment of a step and the retry after a cutback start from
 //! `u_n`, as with `none`.
 
-use crate::analysis::{Analysis, Load};
+use crate::analysis::{Analysis, Load, Step};
 use crate::assembly::{DofMap, ExtraTerms, Pattern, PointField, node_adjacency};
 use crate::error::{FemError, Result};
 use crate::linsolve::{LinearSolver, Structure};
@@ -384,12 +384,7 @@ pub fn run(
                     control.converged();
                 }
                 Err(failure) => {
-                    let hint = match (&failure, extra.num_extra() > 0) {
-                        (Failure::Singular(_), true) => extra
-                            .singular_cause(&dm)
-                            .map_or_else(|| MULTIPLIER_HINT.to_string(), |c| format!("; {c}")),
-                        _ => String::new(),
-                    };
+                    let hint = failure_hint(&failure, extra, &dm);
                     extra.restore();
                     if let (Failure::Singular(m), false) = (&failure, step.nlgeom) {
                         return Err(FemError::Singular(format!(
@@ -402,14 +397,7 @@ pub fn run(
                     if !control.failed() {
                         let searchable =
                             structure(extra, &follower) == Structure::SymmetricDefinite;
-                        let search_hint = if matches!(failure, Failure::Inverted(_))
-                            && searchable
-                            && !step.line_search
-                        {
-                            LINE_SEARCH_HINT
-                        } else {
-                            ""
-                        };
+                        let search_hint = line_search_hint(&failure, step, searchable);
                         return Err(FemError::NotConverged {
                             step: step.name.clone(),
                             load_factor: t,
@@ -427,6 +415,27 @@ pub fn run(
     }
     summary.u = u;
     Ok(summary)
+}
+
+/// What to add to a failure's reason: for a singular tangent with extra unknowns
+/// (multipliers), the cause the extra terms name, else their usual cause ([`MULTIPLIER_HINT`]).
+fn failure_hint(failure: &Failure, extra: &dyn ExtraTerms, dm: &DofMap) -> String {
+    match (failure, extra.num_extra() > 0) {
+        (Failure::Singular(_), true) => extra
+            .singular_cause(dm)
+            .map_or_else(|| MULTIPLIER_HINT.to_string(), |c| format!("; {c}")),
+        _ => String::new(),
+    }
+}
+
+/// [`LINE_SEARCH_HINT`] for a step that fails on an inverted element where the line search
+/// would apply (`searchable`: the residual is an energy gradient) and is off.
+fn line_search_hint(failure: &Failure, step: &Step, searchable: bool) -> &'static str {
+    if matches!(failure, Failure::Inverted(_)) && searchable && !step.line_search {
+        LINE_SEARCH_HINT
+    } else {
+        ""
+    }
 }
 
 /// `u + ratio · du`: the start of an increment extrapolated from the last one.
