@@ -8,9 +8,9 @@ use crate::loads;
 use crate::mesh::Mesh;
 use crate::model::Model;
 
-/// The model's loads (a load with a problem is left out). `active_nodes` marks the nodes of
-/// bodies and rigid masters; only when `nodes_known` (both resolved) are loads on other nodes, or
-/// on faces of no body, a problem.
+/// The model's loads (one whose group, values or faces cannot be used is left out; its problem
+/// is added to `problems`). `active_nodes` marks the nodes of bodies and rigid masters; only when
+/// `nodes_known` (both resolved) are loads on other nodes, or on faces of no body, a problem.
 pub(super) fn resolve(
     model: &Model,
     mesh: &Mesh,

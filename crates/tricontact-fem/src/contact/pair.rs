@@ -428,9 +428,9 @@ pub fn resolve(
     })
 }
 
-/// Young's modulus for the default penalty: that of the body the first master face (of
-/// `master_faces`) bounds, else that of the first slave node's first element (a rigid master),
-/// else 1.
+/// Young's modulus for the default penalty: that of the element bounded by the first of
+/// `master_faces` that bounds a body element; else (a rigid master) that of the first slave
+/// node's first element; else 1.
 fn youngs_modulus(
     mesh: &Mesh,
     bodies: &Bodies<'_>,
@@ -454,7 +454,7 @@ fn youngs_modulus(
 }
 
 /// One search pass against `surface` (from faces of Gmsh tags `face_tags`, search radius
-/// `radius`): the slave `nodes` (`None`: every node of `faces`, in order) with their tributary
+/// `radius`): the slave `nodes` (`None`: every node of `faces`, by index) with their tributary
 /// areas and tri6 proxies over `faces`.
 fn pass(
     mesh: &Mesh,
