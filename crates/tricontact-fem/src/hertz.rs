@@ -337,8 +337,9 @@ fn positive(x: f64) -> bool {
     x > 0.0 && x.is_finite()
 }
 
-/// The table's own values (`norm` that of its axis): finite and positive where they must be, and
-/// the centre and radius within [`FAR`] model sizes of the mesh (a unit slip otherwise).
+/// The table's own values (`norm` that of its axis): a finite centre, a finite positive radius,
+/// modulus (when given) and axis length, a symmetry of at least 1, and the centre and radius
+/// within [`FAR`] model sizes of the mesh (a unit slip otherwise).
 fn check_values(def: &HertzDef, an: &Analysis, norm: f64, problem: &mut dyn FnMut(&str, String)) {
     let centre_finite = def.centre.iter().all(|c| c.is_finite());
     if !centre_finite {

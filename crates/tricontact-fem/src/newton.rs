@@ -359,12 +359,12 @@ pub fn solve_increment(
         if need_tangent {
             factor_tangent(p.pat, &mut asm, &weights, structure, solver)?;
         }
-        let (du, m) = correction(solver, &rhs, &weights);
-        method = m;
+        let solved = correction(solver, &rhs, &weights);
         if !constant_tangent {
             solver.cached = None;
         }
-        let du = du?;
+        let (du, m) = solved?;
+        method = m;
         for (dof, &e) in dm.eq.iter().enumerate() {
             if e != NO_EQ {
                 u[dof] += du[e];
@@ -453,10 +453,11 @@ fn correction(
     solver: &LinearSolver,
     rhs: &[f64],
     weights: &Weights,
-) -> (Result<Vec<f64>, Failure>, &'static str) {
-    let Some(factor) = solver.cached.as_ref() else {
-        return (Err(Failure::Singular("no factorization".into())), "none");
-    };
+) -> Result<(Vec<f64>, &'static str), Failure> {
+    let factor = solver
+        .cached
+        .as_ref()
+        .ok_or_else(|| Failure::Singular("no factorization".into()))?;
     let scaled: Vec<f64> = rhs
         .iter()
         .zip(&weights.residual)
@@ -466,11 +467,10 @@ fn correction(
     for (d, w) in du.iter_mut().zip(&weights.residual) {
         *d *= w;
     }
-    let method = factor.method();
     if du.iter().any(|v| !v.is_finite()) {
-        return (Err(Failure::Singular("non-finite solution".into())), method);
+        return Err(Failure::Singular("non-finite solution".into()));
     }
-    (Ok(du), method)
+    Ok((du, factor.method()))
 }
 
 /// The failure of an increment that used its `iterations` without converging: which test is

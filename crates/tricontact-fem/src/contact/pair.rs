@@ -438,19 +438,17 @@ fn youngs_modulus(
     master_faces: &[usize],
     slaves: &[usize],
 ) -> f64 {
-    let owner_e = |faces: &[usize]| {
-        faces.iter().find_map(|&f| {
-            let c = &mesh.elements[f].nodes;
-            node_elems[c[0]]
-                .iter()
-                .find(|&&e| c.iter().all(|a| bodies.elements[e].nodes.contains(a)))
-                .map(|&e| bodies.youngs[e])
-        })
-    };
+    let master_e = master_faces.iter().find_map(|&f| {
+        let c = &mesh.elements[f].nodes;
+        node_elems[c[0]]
+            .iter()
+            .find(|&&e| c.iter().all(|a| bodies.elements[e].nodes.contains(a)))
+            .map(|&e| bodies.youngs[e])
+    });
     let slave_e = slaves
         .first()
         .and_then(|&a| node_elems[a].first().map(|&e| bodies.youngs[e]));
-    owner_e(master_faces).or(slave_e).unwrap_or(1.0)
+    master_e.or(slave_e).unwrap_or(1.0)
 }
 
 /// One search pass against `surface` (from faces of Gmsh tags `face_tags`, search radius
