@@ -12,8 +12,8 @@
 //!
 //! Determinism: element blocks are computed in parallel (rayon) in batches,
 //! then merged into the matrix in element order, so the assembled values do
-//! not depend on the number of threads. The merge of the tangent runs on two
-//! threads, each over all blocks but into its own half of the columns (each
+//! not depend on the number of threads. The merge of the tangent runs on all
+//! threads, each over all blocks but into its own range of columns (each
 //! value belongs to one column): the same sums, in the same order.
 
 use faer::sparse::{SparseColMat, SymbolicSparseColMat, Triplet};
@@ -384,7 +384,7 @@ pub fn assemble(
             }
         }
         if tangent {
-            scatter_halves(pat, dm, &tangents, dup, &mut values, &mut predictor);
+            scatter_parallel(pat, dm, &tangents, dup, &mut values, &mut predictor);
         }
     }
     let mut trip = Vec::new();
@@ -413,14 +413,16 @@ pub fn assemble(
 }
 
 /// Adds the element tangents `(nodes, k)` into the pattern's `values` and, for prescribed
-/// columns with an increment in `dup`, `−k·Δu_p` into `predictor`: the columns in two halves on
-/// two threads (each value belongs to one column, so each half writes its own part of `values`,
-/// element after element in the same order as one thread would: the sums are the same bit for
-/// bit). The merge is bound by memory latency (the binary search for each block of three rows,
-/// and the values it adds to), so two threads overlap their waits: on the Hertz example (tet10,
-/// fine mesh) the merge was 13–14 % of the run's CPU time on one thread; on two, six interleaved
-/// pairs of runs took 5–14 % less wall-clock time in five and the same time (+0.6 %) in one.
-fn scatter_halves(
+/// columns with an increment in `dup`, `−k·Δu_p` into `predictor`: the columns in one range per
+/// thread, of about as many values each (each value belongs to one column, so each range writes
+/// its own part of `values`, element after element in the same order as one thread would: the
+/// sums are the same bit for bit, whatever the number of threads). The merge is bound by memory
+/// latency (the binary search for each block of three rows, and the values it adds to), so
+/// threads overlap their waits. On the fine Hertz example with a penalty (tet10, 2 cores) the
+/// merge took 4.56–4.59 s of a run on one thread and 2.14–2.51 s on two (three runs each, timed
+/// by a build instrumented for it), and `tricontact run` 24.9–27.5 s against 26.4–31.1 s before
+/// (b24bf05, three interleaved pairs).
+fn scatter_parallel(
     pat: &Pattern,
     dm: &DofMap,
     tangents: &[(&[usize], Vec<f64>)],
@@ -428,10 +430,22 @@ fn scatter_halves(
     values: &mut [f64],
     predictor: &mut [f64],
 ) {
-    let mid = dm.n_eq / 2;
-    let (low, high) = values.split_at_mut(pat.symbolic.col_ptr()[mid]);
-    let half =
-        |range: std::ops::Range<usize>, values: &mut [f64], mut predictor: Option<&mut [f64]>| {
+    let ranges = column_ranges(pat.symbolic.col_ptr(), rayon::current_num_threads());
+    let mut parts = Vec::with_capacity(ranges.len());
+    let mut rest = values;
+    for range in &ranges {
+        let col_ptr = pat.symbolic.col_ptr();
+        let (part, tail) = rest.split_at_mut(col_ptr[range.end] - col_ptr[range.start]);
+        parts.push((range.clone(), part));
+        rest = tail;
+    }
+    let mut predictor = Some(predictor);
+    let work: Vec<_> = parts
+        .into_iter()
+        .map(|(range, part)| (range, part, predictor.take()))
+        .collect();
+    work.into_par_iter()
+        .for_each(|(range, values, mut predictor)| {
             for (nodes, k) in tangents {
                 let columns = Columns {
                     range: range.clone(),
@@ -446,11 +460,28 @@ fn scatter_halves(
                     dup.zip(predictor.as_deref_mut()),
                 );
             }
-        };
-    rayon::join(
-        || half(0..mid, low, Some(predictor)),
-        || half(mid..dm.n_eq, high, None),
-    );
+        });
+}
+
+/// Cuts the columns `0..n` of a pattern with column pointers `col_ptr` (`n + 1` of them) into at
+/// most `parts` consecutive ranges holding about as many values each (at least one range).
+fn column_ranges(col_ptr: &[usize], parts: usize) -> Vec<std::ops::Range<usize>> {
+    let n = col_ptr.len() - 1;
+    let (total, parts) = (col_ptr[n], parts.max(1));
+    let mut ranges = Vec::with_capacity(parts);
+    let mut start = 0;
+    for p in 1..parts {
+        // The first column whose values start at or beyond the p-th share.
+        let end = col_ptr
+            .partition_point(|&v| v < total * p / parts)
+            .clamp(start, n);
+        if end > start {
+            ranges.push(start..end);
+            start = end;
+        }
+    }
+    ranges.push(start..n);
+    ranges
 }
 
 /// The equations `range` of the tangent's columns and their part of the pattern's values (from
@@ -549,13 +580,13 @@ mod tests {
         }
     }
 
-    /// The tangent scattered in two halves of columns on two threads equals, bit for bit, the
-    /// same tangents added one entry at a time into a dense matrix in element order (at the
-    /// pattern's places), and so does the predictor of the prescribed columns: overlapping
-    /// elements of four nodes on a chain of nine, some DOFs prescribed (with and without an
-    /// increment), one node inactive, and one extra unknown after the nodal DOFs.
+    /// The tangent scattered in ranges of columns, one per thread, equals, bit for bit, the same
+    /// tangents added one entry at a time into a dense matrix in element order (at the pattern's
+    /// places), and so does the predictor of the prescribed columns, on 1, 2, 3 and 7 threads:
+    /// overlapping elements of four nodes on a chain of nine, some DOFs prescribed (with and
+    /// without an increment), one node inactive, and one extra unknown after the nodal DOFs.
     #[test]
-    fn the_two_halves_scatter_what_one_pass_adds() {
+    fn the_column_ranges_scatter_what_one_pass_adds() {
         let elements: [&[usize]; 4] = [&[0, 1, 2, 3], &[2, 3, 4, 5], &[5, 6, 7, 8], &[1, 3, 5, 7]];
         let mut active = [true; 10];
         active[9] = false;
@@ -587,16 +618,6 @@ mod tests {
         let mut dup = vec![0.0; 31];
         dup[1] = 0.25;
         dup[25] = -0.5;
-        let mut values = vec![0.0; pat.symbolic.row_idx().len()];
-        let mut predictor = vec![0.0; dm.n_eq];
-        scatter_halves(
-            &pat,
-            &dm,
-            &tangents,
-            Some(&dup),
-            &mut values,
-            &mut predictor,
-        );
         let n = dm.n_eq;
         let (mut dense, mut expected) = (vec![0.0; n * n], vec![0.0; n]);
         for (nodes, k) in &tangents {
@@ -618,28 +639,79 @@ mod tests {
                 }
             }
         }
-        let mut filled = 0;
-        for col in 0..n {
-            for (p, &row) in pat
-                .symbolic
-                .row_idx()
-                .iter()
-                .enumerate()
-                .take(pat.symbolic.col_ptr()[col + 1])
-                .skip(pat.symbolic.col_ptr()[col])
-            {
-                assert_eq!(
-                    values[p].to_bits(),
-                    dense[row * n + col].to_bits(),
-                    "({row}, {col})"
+        for threads in [1, 2, 3, 7] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let mut values = vec![0.0; pat.symbolic.row_idx().len()];
+            let mut predictor = vec![0.0; dm.n_eq];
+            pool.install(|| {
+                scatter_parallel(
+                    &pat,
+                    &dm,
+                    &tangents,
+                    Some(&dup),
+                    &mut values,
+                    &mut predictor,
                 );
-                filled += usize::from(values[p] != 0.0);
+            });
+            let mut filled = 0;
+            for col in 0..n {
+                for (p, &row) in pat
+                    .symbolic
+                    .row_idx()
+                    .iter()
+                    .enumerate()
+                    .take(pat.symbolic.col_ptr()[col + 1])
+                    .skip(pat.symbolic.col_ptr()[col])
+                {
+                    assert_eq!(
+                        values[p].to_bits(),
+                        dense[row * n + col].to_bits(),
+                        "({row}, {col}) on {threads} threads"
+                    );
+                    filled += usize::from(values[p] != 0.0);
+                }
+            }
+            assert!(filled > 100 && n > 20, "{filled} entries of {n} equations");
+            for (got, want) in predictor.iter().zip(&expected) {
+                assert_eq!(got.to_bits(), want.to_bits());
             }
         }
-        assert!(filled > 100 && n > 20, "{filled} entries of {n} equations");
-        for (got, want) in predictor.iter().zip(&expected) {
-            assert_eq!(got.to_bits(), want.to_bits());
-        }
         assert!(expected.iter().filter(|&&v| v != 0.0).count() > 5);
+    }
+
+    /// Column ranges cover every column once, in order, no more of them than asked for (and at
+    /// least one), each holding at most a share of the values plus one column's.
+    #[test]
+    fn column_ranges_cover_the_columns_in_about_equal_shares() {
+        let counts = [3usize, 0, 0, 9, 1, 4, 4, 0, 12, 2, 7, 5];
+        let mut col_ptr = vec![0];
+        for c in counts {
+            col_ptr.push(col_ptr.last().unwrap() + c);
+        }
+        let total = *col_ptr.last().unwrap();
+        for parts in [0, 1, 2, 3, 5, 12, 40] {
+            let ranges = column_ranges(&col_ptr, parts);
+            assert!(
+                !ranges.is_empty() && ranges.len() <= parts.max(1),
+                "{parts}: {ranges:?}"
+            );
+            assert_eq!(ranges[0].start, 0);
+            assert_eq!(ranges.last().unwrap().end, counts.len());
+            for pair in ranges.windows(2) {
+                assert_eq!(pair[0].end, pair[1].start, "{parts}: {ranges:?}");
+            }
+            for r in &ranges {
+                let held = col_ptr[r.end] - col_ptr[r.start];
+                assert!(
+                    held <= total / parts.max(1) + 12,
+                    "{parts}: {r:?} holds {held} of {total}"
+                );
+            }
+        }
+        assert_eq!(column_ranges(&[0], 4), vec![0..0]);
+        assert_eq!(column_ranges(&[0, 0, 0], 2), vec![0..2]);
     }
 }
