@@ -430,20 +430,15 @@ fn scatter_parallel(
     values: &mut [f64],
     predictor: &mut [f64],
 ) {
-    let ranges = column_ranges(pat.symbolic.col_ptr(), rayon::current_num_threads());
-    let mut parts = Vec::with_capacity(ranges.len());
-    let mut rest = values;
-    for range in &ranges {
-        let col_ptr = pat.symbolic.col_ptr();
+    let col_ptr = pat.symbolic.col_ptr();
+    // Each range's part of the values; the predictor goes with the first.
+    let (mut rest, mut predictor) = (values, Some(predictor));
+    let mut work = Vec::new();
+    for range in column_ranges(col_ptr, rayon::current_num_threads()) {
         let (part, tail) = rest.split_at_mut(col_ptr[range.end] - col_ptr[range.start]);
-        parts.push((range.clone(), part));
+        work.push((range, part, predictor.take()));
         rest = tail;
     }
-    let mut predictor = Some(predictor);
-    let work: Vec<_> = parts
-        .into_iter()
-        .map(|(range, part)| (range, part, predictor.take()))
-        .collect();
     work.into_par_iter()
         .for_each(|(range, values, mut predictor)| {
             for (nodes, k) in tangents {
