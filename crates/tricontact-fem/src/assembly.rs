@@ -209,9 +209,17 @@ impl DofMap {
 /// elements.
 #[must_use]
 pub fn node_adjacency(an: &Analysis) -> Vec<Vec<usize>> {
-    let mut adj: Vec<Vec<usize>> = vec![Vec::new(); an.mesh.nodes.len()];
-    for be in &an.body {
-        let nodes = &an.mesh.elements[be.element].nodes;
+    let elements = an
+        .body
+        .iter()
+        .map(|be| &an.mesh.elements[be.element].nodes[..]);
+    adjacency(an.mesh.nodes.len(), elements)
+}
+
+/// Sorted neighbour lists (self included) of `n_nodes` nodes through `elements` (their nodes).
+fn adjacency<'a>(n_nodes: usize, elements: impl Iterator<Item = &'a [usize]>) -> Vec<Vec<usize>> {
+    let mut adj: Vec<Vec<usize>> = vec![Vec::new(); n_nodes];
+    for nodes in elements {
         for &a in nodes {
             adj[a].extend_from_slice(nodes);
         }
@@ -590,25 +598,11 @@ mod tests {
             prescribed[dof] = true;
         }
         let dm = DofMap::new(&active, &prescribed, 1);
-        let mut adj: Vec<Vec<usize>> = vec![Vec::new(); 10];
-        for nodes in elements {
-            for &a in nodes {
-                adj[a].extend_from_slice(nodes);
-            }
-        }
-        for v in &mut adj {
-            v.sort_unstable();
-            v.dedup();
-        }
-        let pat = Pattern::from_adjacency(&adj, &dm);
-        let mut seed = 7u64;
-        let mut next = move || {
-            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let pat = Pattern::from_adjacency(&adjacency(10, elements.into_iter()), &dm);
+        let mut next = tricontact::search::scenes::uniform(7);
         let tangents: Vec<(&[usize], Vec<f64>)> = elements
             .iter()
-            .map(|&nodes| (nodes, (0..144).map(|_| next()).collect()))
+            .map(|&nodes| (nodes, (0..144).map(|_| next() - 0.5).collect()))
             .collect();
         let mut dup = vec![0.0; 31];
         dup[1] = 0.25;
