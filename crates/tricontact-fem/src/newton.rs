@@ -360,8 +360,8 @@ pub fn solve_increment(
             factor_tangent(p.pat, &mut asm, &weights, structure, solver)?;
         }
         let solved = correction(solver, &rhs, &weights);
-        if !constant_tangent {
-            solver.cached = None;
+        if !constant_tangent && let Some(f) = solver.cached.take() {
+            solver.recycle(f);
         }
         let (du, m) = solved?;
         method = m;
