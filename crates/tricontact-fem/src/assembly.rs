@@ -14,7 +14,8 @@
 //! then merged into the matrix in element order, so the assembled values do
 //! not depend on the number of threads. The merge of the tangent runs on all
 //! threads, each over all blocks but into its own range of columns (each
-//! value belongs to one column): the same sums, in the same order.
+//! value belongs to one column): the same sums, in the same order. Where each
+//! block goes is found once, with the pattern ([`Pattern`]), not at every merge.
 
 use faer::sparse::{SparseColMat, SymbolicSparseColMat, Triplet};
 use rayon::prelude::*;
@@ -231,23 +232,49 @@ fn adjacency<'a>(n_nodes: usize, elements: impl Iterator<Item = &'a [usize]>) ->
     adj
 }
 
-/// Column-compressed sparsity of the element part of the tangent.
+/// Column-compressed sparsity of the element part of the tangent, and where each body element's
+/// blocks lie in it.
+///
+/// In every column the rows of one node are contiguous (its free DOFs, in order), and the three
+/// columns of a node hold the same rows (those of its neighbours). So the block of an element's
+/// nodes `a` (rows) and `b` (columns) starts at the same place in each of `b`'s columns, relative
+/// to the column's start: one offset per pair of the element's nodes, found once here, places
+/// all of its entries. The merge then reads them instead of searching the columns: on the fine
+/// Hertz example, that search was half of the merge's time (see [`scatter_parallel`]).
 #[derive(Clone, Debug)]
 pub struct Pattern {
     /// Symbolic structure (sorted row indices).
     pub symbolic: SymbolicSparseColMat<usize>,
+    /// Per body element of `n` nodes, `n × n` offsets, the pair `(a, b)` of its local nodes at
+    /// `a n + b`: where node `a`'s first free row lies in each column of node `b`, from the
+    /// column's start (0 where `a` or `b` has no free DOF).
+    blocks: Vec<u32>,
+    /// Where each body element's offsets start in `blocks` (one more than the elements).
+    block_starts: Vec<usize>,
 }
 
 impl Pattern {
     /// Builds the pattern from the node adjacency of the body elements.
     #[must_use]
     pub fn new(an: &Analysis, dm: &DofMap) -> Self {
-        Self::from_adjacency(&node_adjacency(an), dm)
+        Self::from_adjacency(&node_adjacency(an), an, dm)
     }
 
-    /// Builds the pattern from a node adjacency (see [`node_adjacency`]).
+    /// Builds the pattern from the node adjacency of the body elements of `an` (see
+    /// [`node_adjacency`]).
     #[must_use]
-    pub fn from_adjacency(adj: &[Vec<usize>], dm: &DofMap) -> Self {
+    pub fn from_adjacency(adj: &[Vec<usize>], an: &Analysis, dm: &DofMap) -> Self {
+        let elements: Vec<&[usize]> = an
+            .body
+            .iter()
+            .map(|be| &an.mesh.elements[be.element].nodes[..])
+            .collect();
+        Self::from_elements(adj, &elements, dm)
+    }
+
+    /// The pattern of a node adjacency, with the block offsets of `elements` (their nodes; each
+    /// pair of an element's nodes adjacent in `adj`).
+    fn from_elements(adj: &[Vec<usize>], elements: &[&[usize]], dm: &DofMap) -> Self {
         let mut col_ptr = Vec::with_capacity(dm.n_eq + 1);
         let mut row_idx = Vec::new();
         col_ptr.push(0);
@@ -268,7 +295,55 @@ impl Pattern {
             col_ptr.push(row_idx.len());
         }
         let symbolic = SymbolicSparseColMat::new_checked(dm.n_eq, dm.n_eq, col_ptr, None, row_idx);
-        Self { symbolic }
+        let mut block_starts = Vec::with_capacity(elements.len() + 1);
+        block_starts.push(0);
+        for nodes in elements {
+            block_starts.push(block_starts.last().copied().unwrap_or(0) + nodes.len().pow(2));
+        }
+        let mut pattern = Self {
+            symbolic,
+            blocks: vec![0; block_starts.last().copied().unwrap_or(0)],
+            block_starts,
+        };
+        let mut parts = Vec::with_capacity(elements.len());
+        let mut rest = std::mem::take(&mut pattern.blocks);
+        {
+            let mut tail = rest.as_mut_slice();
+            for nodes in elements {
+                let (part, after) = tail.split_at_mut(nodes.len().pow(2));
+                parts.push((*nodes, part));
+                tail = after;
+            }
+            parts
+                .into_par_iter()
+                .for_each(|(nodes, part)| pattern.fill_blocks(dm, nodes, part));
+        }
+        pattern.blocks = rest;
+        pattern
+    }
+
+    /// The block offsets of an element with `nodes` (see [`Pattern::blocks`]) into `out`.
+    fn fill_blocks(&self, dm: &DofMap, nodes: &[usize], out: &mut [u32]) {
+        let first_free = |a: usize| (0..3).map(|i| dm.eq[3 * a + i]).find(|&e| e != NO_EQ);
+        let n = nodes.len();
+        for (lb, &b) in nodes.iter().enumerate() {
+            let Some(col) = first_free(b) else { continue };
+            let start = self.symbolic.col_ptr()[col];
+            for (la, &a) in nodes.iter().enumerate() {
+                if let Some(row) = first_free(a) {
+                    let at = self
+                        .find(row, col)
+                        .expect("an element's nodes are adjacent");
+                    out[la * n + lb] =
+                        u32::try_from(at - start).expect("a column of fewer than 2³² entries");
+                }
+            }
+        }
+    }
+
+    /// The block offsets of body element `j` (see [`Pattern::blocks`]).
+    fn blocks_of(&self, j: usize) -> &[u32] {
+        &self.blocks[self.block_starts[j]..self.block_starts[j + 1]]
     }
 
     /// Position of `(row, col)` in the value array.
@@ -329,6 +404,14 @@ const BATCH: usize = 4096;
 /// Element force vector and row-major tangent block.
 type Block = (Vec<f64>, Vec<f64>);
 
+/// An element's tangent `k` (row-major, `3n × 3n`) for the merge: its `n` nodes and where its
+/// blocks lie in the pattern (see [`Pattern::blocks`]).
+struct Tangent<'a> {
+    nodes: &'a [usize],
+    blocks: &'a [u32],
+    k: Vec<f64>,
+}
+
 /// Assembles internal forces, tangent (if `tangent`) and the predictor term
 /// for prescribed increments `dup` (global DOF vector) if given.
 ///
@@ -388,7 +471,11 @@ pub fn assemble(
                 }
             }
             if tangent {
-                tangents.push((nodes.as_slice(), k));
+                tangents.push(Tangent {
+                    nodes,
+                    blocks: pat.blocks_of(batch_index * BATCH + j),
+                    k,
+                });
             }
         }
         if tangent {
@@ -425,15 +512,18 @@ pub fn assemble(
 /// thread, of about as many values each (each value belongs to one column, so each range writes
 /// its own part of `values`, element after element in the same order as one thread would: the
 /// sums are the same bit for bit, whatever the number of threads). The merge is bound by memory
-/// latency (the binary search for each block of three rows, and the values it adds to), so
-/// threads overlap their waits. On the fine Hertz example with a penalty (tet10, 2 cores) the
-/// merge took 4.56–4.59 s of a run on one thread and 2.14–2.51 s on two (three runs each, timed
-/// by a build instrumented for it), and `tricontact run` 24.9–27.5 s against 26.4–31.1 s before
-/// (b24bf05, three interleaved pairs).
+/// latency (the values it adds to), so threads overlap their waits. On the fine Hertz example
+/// with a penalty (2 cores) the merge took 4.56–4.59 s of a run on one thread and 2.14–2.51 s on
+/// two (three runs each, timed by a build instrumented for it), and `tricontact run` 24.9–27.5 s
+/// against 26.4–31.1 s before (b24bf05, three interleaved pairs). Each block's place then came
+/// from a binary search in its column, half of the merge's time; read from the pattern's block
+/// offsets instead, the merge's share of the processor time in the augmented Hertz run went from
+/// 13.7 % to 5.9 % (`perf`), and the assembly of the hex8 cube (`fem-bench 30`) from 0.32–0.33 s
+/// to 0.24 s.
 fn scatter_parallel(
     pat: &Pattern,
     dm: &DofMap,
-    tangents: &[(&[usize], Vec<f64>)],
+    tangents: &[Tangent<'_>],
     dup: Option<&[f64]>,
     values: &mut [f64],
     predictor: &mut [f64],
@@ -449,19 +539,12 @@ fn scatter_parallel(
     }
     work.into_par_iter()
         .for_each(|(range, values, mut predictor)| {
-            for (nodes, k) in tangents {
+            for tangent in tangents {
                 let columns = Columns {
                     range: range.clone(),
                     values: &mut *values,
                 };
-                scatter(
-                    pat,
-                    dm,
-                    nodes,
-                    k,
-                    columns,
-                    dup.zip(predictor.as_deref_mut()),
-                );
+                scatter(pat, dm, tangent, columns, dup.zip(predictor.as_deref_mut()));
             }
         });
 }
@@ -494,18 +577,21 @@ struct Columns<'a> {
     values: &'a mut [f64],
 }
 
-/// Adds the element tangent `k` (row-major, `3n × 3n` for the `n` `nodes`) into the columns
-/// `columns`, and, given the increments `dup` of the prescribed DOFs, `−k·Δu_p` of every
-/// prescribed column into `predictor`.
+/// Adds the element tangent `k` into the columns `columns`, and, given the increments `dup` of
+/// the prescribed DOFs, `−k·Δu_p` of every prescribed column into `predictor`.
 fn scatter(
     pat: &Pattern,
     dm: &DofMap,
-    nodes: &[usize],
-    k: &[f64],
+    &Tangent {
+        nodes,
+        blocks,
+        ref k,
+    }: &Tangent<'_>,
     columns: Columns<'_>,
     mut predictor: Option<(&[f64], &mut [f64])>,
 ) {
-    let nd = 3 * nodes.len();
+    let n = nodes.len();
+    let nd = 3 * n;
     let base = pat.symbolic.col_ptr()[columns.range.start];
     for (lb, &b) in nodes.iter().enumerate() {
         for kk in 0..3 {
@@ -532,20 +618,16 @@ fn scatter(
             if !columns.range.contains(&col) {
                 continue;
             }
+            let start = pat.symbolic.col_ptr()[col] - base;
             for (la, &a) in nodes.iter().enumerate() {
-                // Rows of node `a` are contiguous in the column.
-                let mut pos = None;
+                // Rows of node `a` are contiguous in the column, from its block's offset.
+                let mut p = start + blocks[la * n + lb] as usize;
                 for i in 0..3 {
-                    let r = dm.eq[3 * a + i];
-                    if r == NO_EQ {
+                    if dm.eq[3 * a + i] == NO_EQ {
                         continue;
                     }
-                    let p = match pos {
-                        Some(p) => p + 1,
-                        None => pat.find(r, col).expect("entry in pattern"),
-                    };
-                    columns.values[p - base] += k[(3 * la + i) * nd + c];
-                    pos = Some(p);
+                    columns.values[p] += k[(3 * la + i) * nd + c];
+                    p += 1;
                 }
             }
         }
@@ -598,18 +680,23 @@ mod tests {
             prescribed[dof] = true;
         }
         let dm = DofMap::new(&active, &prescribed, 1);
-        let pat = Pattern::from_adjacency(&adjacency(10, elements.into_iter()), &dm);
+        let pat = Pattern::from_elements(&adjacency(10, elements.into_iter()), &elements, &dm);
         let mut next = tricontact::search::scenes::uniform(7);
-        let tangents: Vec<(&[usize], Vec<f64>)> = elements
+        let tangents: Vec<Tangent<'_>> = elements
             .iter()
-            .map(|&nodes| (nodes, (0..144).map(|_| next() - 0.5).collect()))
+            .enumerate()
+            .map(|(j, &nodes)| Tangent {
+                nodes,
+                blocks: pat.blocks_of(j),
+                k: (0..144).map(|_| next() - 0.5).collect(),
+            })
             .collect();
         let mut dup = vec![0.0; 31];
         dup[1] = 0.25;
         dup[25] = -0.5;
         let n = dm.n_eq;
         let (mut dense, mut expected) = (vec![0.0; n * n], vec![0.0; n]);
-        for (nodes, k) in &tangents {
+        for Tangent { nodes, k, .. } in &tangents {
             let dofs: Vec<usize> = nodes.iter().flat_map(|&a| 3 * a..3 * a + 3).collect();
             for (c, &cd) in dofs.iter().enumerate() {
                 for (r, &rd) in dofs.iter().enumerate() {

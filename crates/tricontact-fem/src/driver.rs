@@ -293,7 +293,7 @@ pub fn run(
         }
         let dm = DofMap::new(&an.active_nodes, &mask, extra.num_extra());
         let adj = node_adjacency(an);
-        let pat = Pattern::from_adjacency(&adj, &dm);
+        let pat = Pattern::from_adjacency(&adj, an, &dm);
         let order = equation_order(&an.mesh.nodes, &adj, &dm, &extra.extra_nodes());
         let mut solver = LinearSolver::new().with_order(order);
         drop(adj);

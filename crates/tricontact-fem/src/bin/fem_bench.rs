@@ -340,7 +340,7 @@ fn main() {
     let dm = DofMap::new(&an.active_nodes, &mask, 0);
     let t = Instant::now();
     let adj = node_adjacency(&an);
-    let pat = Pattern::from_adjacency(&adj, &dm);
+    let pat = Pattern::from_adjacency(&adj, &an, &dm);
     let amd = std::env::args().any(|a| a == "--amd");
     let order = if amd {
         None
