@@ -65,7 +65,7 @@ fn grid_ties_on_edges_and_vertices_match_brute_force() {
     let (nodes, facets) = grid(8, 0.5);
     let surface = Surface::new(facets, nodes.len()).unwrap();
     let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
-    let mut checked = 0;
+    let (mut checked, mut at_radius) = (0, 0);
     // Every vertex, every edge midpoint and the facet centres, on the plane and above/below it.
     for j in 0..=16 {
         for i in 0..=16 {
@@ -85,11 +85,22 @@ fn grid_ties_on_edges_and_vertices_match_brute_force() {
                 let best = d2(tree.unwrap().facet);
                 let lowest = (0..surface.len() as u32).find(|&f| d2(f) == best).unwrap();
                 assert_eq!(tree.unwrap().facet, lowest);
+                // Every facet within a radius, those exactly at it included (the points 0.3 off
+                // the plane, radius 0.3; the vertices and edge midpoints, radius 0.25).
+                for radius in [0.3, 0.25] {
+                    let near = bvh.within(&surface, &q, radius);
+                    assert_eq!(near, brute_force_within(&surface, &nodes, &q, radius));
+                    at_radius += near
+                        .iter()
+                        .filter(|h| d2(h.facet) == radius * radius)
+                        .count();
+                }
                 checked += 1;
             }
         }
     }
     assert_eq!(checked, 17 * 17 * 3);
+    assert!(at_radius > 1000, "{at_radius} facets exactly at the radius");
 }
 
 #[test]

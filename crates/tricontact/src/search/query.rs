@@ -357,16 +357,20 @@ impl Bvh {
         let mut stack = vec![self.root];
         while let Some(child) = stack.pop() {
             if let Some((first, count)) = as_leaf(child) {
-                for s in first..first + count {
-                    let facet = self.order[s];
-                    let c = self.slot_corners(index(s));
-                    if !q.excludes(surface, facet)
-                        && distance_squared_to_triangle(&c[0], &c[1], &c[2], &q.point) <= r2
-                    {
-                        hits.push(Hit {
-                            facet,
-                            closest: closest_point_on_triangle(&c[0], &c[1], &c[2], &q.point),
-                        });
+                // The leaf's facets measured together (bit for bit the scalar kernel's squared
+                // distances), the closest point computed for those within only.
+                for (g, n) in lanes::groups(first, count) {
+                    let m = lanes::measure_leaf(self.leaf_rows(g), n, &q.point);
+                    let d2 = m.d2.to_array();
+                    for (k, &d2) in d2.iter().enumerate().take(n) {
+                        let facet = self.order[g + k];
+                        if d2 <= r2 && !q.excludes(surface, facet) {
+                            let c = self.slot_corners(index(g + k));
+                            hits.push(Hit {
+                                facet,
+                                closest: closest_point_on_triangle(&c[0], &c[1], &c[2], &q.point),
+                            });
+                        }
                     }
                 }
                 continue;
