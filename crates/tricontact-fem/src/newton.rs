@@ -207,7 +207,6 @@ pub fn solve_increment(
     let (an, dm) = (p.an, p.dm);
     let nlgeom = p.step.nlgeom;
     let structure = structure(extra, p.follower);
-    let reuse = !extra.nonlinear();
     let mut u = start.to_vec();
     let mut dup = vec![0.0; u.len()];
     for &(dof, v) in p.prescribed {
@@ -352,9 +351,6 @@ pub fn solve_increment(
                 line_searches,
                 notes,
             });
-        }
-        if !reuse {
-            solver.reset();
         }
         if need_tangent {
             factor_tangent(p.pat, &mut asm, &weights, structure, solver)?;
