@@ -245,3 +245,150 @@ fn nodes_without_positions_are_named() {
         "{message}"
     );
 }
+
+/// The rule applied to every facet within `radius` (what `choose_facet` did before it searched a
+/// growing reach): the reference for the search.
+fn choose_among_all(
+    surface: &Surface,
+    bvh: &Bvh,
+    positions: &[Vec3],
+    slave: u32,
+    radius: f64,
+) -> Option<(u32, f64)> {
+    let x = positions[slave as usize];
+    let query = tricontact::search::Query {
+        point: x,
+        exclude: Some(slave),
+    };
+    let mut best: Option<(u32, f64)> = None;
+    for hit in bvh.within(surface, &query, radius) {
+        let [a, b, c] = surface.corners(hit.facet, positions);
+        let Ok(pair) = tricontact::NodeFacet::new(a, b, c, x) else {
+            continue;
+        };
+        if !pair
+            .projection
+            .is_inside(tricontact::contact::PROJECTION_TOLERANCE)
+        {
+            continue;
+        }
+        let g = pair.gap();
+        if best.is_none_or(|(f, b)| g.abs() < b.abs() || (g.abs() == b.abs() && hit.facet < f)) {
+            best = Some((hit.facet, g));
+        }
+    }
+    best
+}
+
+/// The search over a growing reach chooses what the rule chooses among all facets within the
+/// radius, facet and gap bit for bit: on a graded, bumpy master (cells from 0.02 to 0.5, the
+/// radius its longest edge), a convex ridge, a valley and a torus (with a part of the slave nodes
+/// on it: self-contact), for nodes above, below and beyond the master, on its vertices and edges.
+/// Enough of them are answered beyond their closest facet, and enough find none, for the
+/// reach's growth to be exercised.
+#[test]
+fn the_growing_reach_chooses_what_all_facets_within_the_radius_choose() {
+    let mut r = tricontact::search::scenes::uniform(17);
+    // Graded and bumpy: coordinates x = 4 s², s uniform in [0, 1].
+    let n = 20u32;
+    let at = |i: u32| 4.0 * (f64::from(i) / f64::from(n)).powi(2);
+    let mut graded = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let (x, y) = (at(i), at(j));
+            graded.push(Vec3::new(x, y, 0.02 * (3.0 * x).sin() * (2.0 * y).cos()));
+        }
+    }
+    let id = |i: u32, j: u32| j * (n + 1) + i;
+    let mut graded_facets = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            graded_facets.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            graded_facets.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    let (torus_nodes, torus_facets) = tricontact::search::scenes::torus(24, 12, 2.0, 0.6);
+    // A small plate 0.4 above a large one: beside the small plate, the closest facet is one of
+    // its edges, which the node does not project into, and the facet chosen lies below, farther.
+    let (mut stacked, mut stacked_facets) = grid(4, 0.25);
+    let (low, low_facets) = grid(6, 1.0);
+    let shift = u32::try_from(stacked.len()).unwrap();
+    stacked.extend(low.iter().map(|p| p + Vec3::new(-2.5, -2.5, -0.4)));
+    stacked_facets.extend(low_facets.iter().map(|f| f.map(|v| v + shift)));
+    let scenes = [
+        (graded, graded_facets),
+        ridge(-1.0),
+        ridge(1.0),
+        (torus_nodes, torus_facets),
+        (stacked, stacked_facets),
+    ];
+    let (mut compared, mut beyond_nearest, mut none) = (0, 0, 0);
+    for (scene, (nodes, facets)) in scenes.iter().enumerate() {
+        let longest = facets
+            .iter()
+            .flat_map(|f| {
+                (0..3).map(move |e| (nodes[f[e] as usize] - nodes[f[(e + 1) % 3] as usize]).norm())
+            })
+            .fold(0.0, f64::max);
+        let lo = nodes
+            .iter()
+            .fold(Vec3::repeat(f64::INFINITY), |a, p| a.inf(p));
+        let hi = nodes
+            .iter()
+            .fold(Vec3::repeat(f64::NEG_INFINITY), |a, p| a.sup(p));
+        let mut points: Vec<Vec3> = (0..600)
+            .map(|_| {
+                let t = Vec3::new(1.4 * r() - 0.2, 1.4 * r() - 0.2, r());
+                let z = lo.z + (hi.z - lo.z) * t.z + longest * (r() - 0.6);
+                Vec3::new(lo.x + (hi.x - lo.x) * t.x, lo.y + (hi.y - lo.y) * t.y, z)
+            })
+            .collect();
+        // On vertices and edge midpoints, just inside.
+        for f in facets.iter().step_by(7) {
+            let [a, b, _] = f.map(|v| nodes[v as usize]);
+            points.push(a - Vec3::new(0.0, 0.0, 1e-3));
+            points.push(0.5 * (a + b) - Vec3::new(0.0, 0.0, 1e-3));
+        }
+        // The torus's slave nodes include some of its own nodes (self-contact).
+        let own = if scene == 3 { nodes.len() / 3 } else { 0 };
+        // Over the small plate and around it, for the stacked plates.
+        if scene == 4 {
+            points.truncate(0);
+            points.extend(
+                (0..600).map(|_| Vec3::new(2.0 * r() - 0.5, 2.0 * r() - 0.5, 0.6 * r() - 0.3)),
+            );
+        }
+        let mut all = nodes.clone();
+        all.extend(points);
+        let surface = Surface::new(facets.clone(), all.len()).unwrap();
+        let bvh = Bvh::build(&surface, &all, 0.0).unwrap();
+        let slaves = (0..own).step_by(3).chain(nodes.len()..all.len());
+        for slave in slaves {
+            let slave = u32::try_from(slave).unwrap();
+            let got = choose_facet(&surface, &bvh, &all, slave, longest);
+            let want = choose_among_all(&surface, &bvh, &all, slave, longest);
+            assert_eq!(
+                got.map(|(f, p)| (f, p.gap().to_bits())),
+                want.map(|(f, g)| (f, g.to_bits())),
+                "scene {scene}, slave {slave} at {:?}",
+                all[slave as usize]
+            );
+            compared += 1;
+            let query = tricontact::search::Query {
+                point: all[slave as usize],
+                exclude: Some(slave),
+            };
+            match (want, bvh.closest(&surface, &query, longest)) {
+                (Some((_, g)), Some(near)) if g.abs() > near.closest.distance + 1e-6 => {
+                    beyond_nearest += 1;
+                }
+                (None, _) => none += 1,
+                _ => {}
+            }
+        }
+    }
+    assert!(
+        compared > 3000 && beyond_nearest > 100 && none > 100,
+        "{compared} compared, {beyond_nearest} beyond their closest facet, {none} with none"
+    );
+}

@@ -60,6 +60,31 @@ proptest! {
     }
 }
 
+/// The tree's extent is the diagonal of its facets' box, up to the boxes' rounding to `f32`
+/// (outwards), whether the root is a node or a single leaf; `0` for a surface without a valid
+/// facet.
+#[test]
+fn the_extent_is_the_diagonal_of_the_facets_box() {
+    for (n, h) in [(8, 0.5), (1, 3.0)] {
+        let (nodes, facets) = grid(n, h);
+        let surface = Surface::new(facets, nodes.len()).unwrap();
+        let bvh = Bvh::build(&surface, &nodes, 0.0).unwrap();
+        let diagonal = f64::from(n) * h * 2f64.sqrt();
+        let extent = bvh.extent();
+        assert!(
+            extent >= diagonal * (1.0 - 1e-12) && extent <= diagonal * (1.0 + 1e-6),
+            "{n} cells: {extent} for {diagonal}"
+        );
+    }
+    let collinear = [
+        Vec3::zeros(),
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::new(2.0, 0.0, 0.0),
+    ];
+    let surface = Surface::new(vec![[0, 1, 2]], 3).unwrap();
+    assert_eq!(Bvh::build(&surface, &collinear, 0.0).unwrap().extent(), 0.0);
+}
+
 #[test]
 fn grid_ties_on_edges_and_vertices_match_brute_force() {
     let (nodes, facets) = grid(8, 0.5);

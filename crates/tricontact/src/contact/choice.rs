@@ -33,11 +33,28 @@ use crate::search::{Bvh, Query, Surface};
 /// shared edge or vertex projects into every facet sharing it despite round-off.
 pub const PROJECTION_TOLERANCE: f64 = 1e-9;
 
+/// Relative margin of the search's certificate (see [`choose_facet`]), on the extent of the master
+/// surface and the magnitude of the node's coordinates.
+const MARGIN: f64 = 1e-7;
+
 /// The facet `slave` is constrained against, with the evaluated node–facet pair, or `None` when the
 /// node projects into no facet within `radius`.
 ///
 /// `bvh` must have been built or updated with `positions`. The slave node is excluded from its own
 /// facets (self-contact).
+///
+/// # Search
+/// The rule's candidates are the facets within `radius`, but the answer is found among far fewer.
+/// For a facet `f` the node projects into, `|P_f|` is its distance `d_f` to the facet (the foot is
+/// the closest point; within the projection tolerance, the foot lies outside by at most
+/// `6·10⁻⁹` of the facet's size). So when the best facet among those within a reach `ρ` has
+/// `|P| ≤ ρ − μ`, every facet beyond `ρ` has `|P_f| > ρ − μ/2` and can neither beat nor tie it:
+/// the answer is that of all facets within `radius`. The margin `μ` is [`MARGIN`] times the
+/// extent of the surface plus the magnitude of the node's coordinates, far above the tolerance's
+/// offset and the rounding of `P` and `d_f`. The reach starts at the distance to the closest facet
+/// (plus `2μ`) and grows, by at least an eighth of `radius`, until that holds or it is `radius`.
+/// On the fine Hertz example (a rigid flat meshed finer under the sphere than away from it, the
+/// radius its longest edge) a node met 314 facets within `radius` on average.
 ///
 /// # Panics
 /// If `slave` has no position, or `bvh` was built on another surface ([`Bvh::within`]).
@@ -59,10 +76,38 @@ pub fn choose_facet(
         point: x,
         exclude: Some(slave),
     };
+    if !(radius.is_finite() && radius > 0.0) {
+        return best_within(surface, bvh, positions, &query, radius);
+    }
+    let nearest = bvh.closest(surface, &query, radius)?;
+    let margin = MARGIN * (bvh.extent() + x.amax());
+    let mut reach = nearest.closest.distance + 2.0 * margin;
+    loop {
+        reach = reach.min(radius);
+        let best = best_within(surface, bvh, positions, &query, reach);
+        let certified = best
+            .as_ref()
+            .is_some_and(|(_, pair)| pair.gap().abs() <= reach - margin);
+        if certified || reach >= radius {
+            return best;
+        }
+        reach += reach.max(radius / 8.0).max(2.0 * margin);
+    }
+}
+
+/// The rule over the facets within `reach` of the query: those the node projects into, the
+/// smallest `|P|`, ties to the lowest facet index.
+fn best_within(
+    surface: &Surface,
+    bvh: &Bvh,
+    positions: &[Vec3],
+    query: &Query,
+    reach: f64,
+) -> Option<(u32, NodeFacet)> {
     let mut best: Option<(u32, NodeFacet)> = None;
-    for hit in bvh.within(surface, &query, radius) {
+    for hit in bvh.within(surface, query, reach) {
         let [a, b, c] = surface.corners(hit.facet, positions);
-        let Ok(pair) = NodeFacet::new(a, b, c, x) else {
+        let Ok(pair) = NodeFacet::new(a, b, c, query.point) else {
             continue;
         };
         if !pair.projection.is_inside(PROJECTION_TOLERANCE) {

@@ -248,6 +248,24 @@ impl Bvh {
             .collect()
     }
 
+    /// The diagonal of a box holding every facet of the tree (the root's child boxes as stored,
+    /// inflated and rounded outwards; the facets themselves when the root is a leaf): at least
+    /// the size of any facet, `0` without any.
+    #[must_use]
+    pub fn extent(&self) -> f64 {
+        let empty = Aabb::EMPTY;
+        let b = if let Some((first, count)) = as_leaf(self.root) {
+            (first..first + count)
+                .flat_map(|s| self.slot_corners(index(s)))
+                .fold(empty, |b, p| b.union_point(&p))
+        } else {
+            let node = &self.nodes[self.root as usize];
+            (0..WIDTH).fold(empty, |b, k| b.union(&node.child_box(k)))
+        };
+        let d = (b.max - b.min).norm();
+        if d.is_finite() { d } else { 0.0 }
+    }
+
     /// The number of internal tree nodes.
     #[must_use]
     pub fn node_count(&self) -> usize {
