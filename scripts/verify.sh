@@ -1,6 +1,6 @@
 #!/bin/sh
 # Runs every example of VERIFICATION.md and writes its results (tables, plots) under
-# examples/*/results/. About 2½ minutes on two cores, most of it the three fine Hertz runs.
+# examples/*/results/. About 1¼ minutes on two cores, most of it the three fine Hertz runs.
 #   sh scripts/verify.sh
 set -e
 cargo build --release -p tricontact-cli
