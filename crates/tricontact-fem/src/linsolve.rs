@@ -321,27 +321,37 @@ fn llt(
     buffers: &mut Buffers,
 ) -> Result<Option<Factor>, Singular> {
     let par = faer::get_global_parallelism();
-    let mut values = buffers.values(symbolic.len_val());
     let req = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
-    let ok = symbolic
-        .factorize_numeric_llt::<f64>(
-            &mut values,
-            a,
-            Side::Lower,
-            Default::default(),
-            par,
-            MemStack::new(buffers.scratch(req)?),
-            Default::default(),
-        )
-        .is_ok();
-    if !ok {
-        buffers.values = values;
-        return Ok(None);
+    let values = numeric(symbolic, buffers, req, |values, stack| {
+        let side = Side::Lower;
+        let (regularization, params) = (Default::default(), Default::default());
+        symbolic
+            .factorize_numeric_llt::<f64>(values, a, side, regularization, par, stack, params)
+            .is_ok()
+    })?;
+    Ok(values.map(|values| {
+        Factor::Llt(Cholesky {
+            symbolic: symbolic.clone(),
+            values,
+        })
+    }))
+}
+
+/// The values of a numeric factorization on `symbolic`, made by `factor` (given them and its
+/// scratch space, `true` when it succeeds) in the memory `buffers` keep; `None` when it fails,
+/// the memory kept again.
+fn numeric(
+    symbolic: &SymbolicCholesky<usize>,
+    buffers: &mut Buffers,
+    req: StackReq,
+    factor: impl FnOnce(&mut [f64], &mut MemStack) -> bool,
+) -> Result<Option<Vec<f64>>, Singular> {
+    let mut values = buffers.values(symbolic.len_val());
+    if factor(&mut values, MemStack::new(buffers.scratch(req)?)) {
+        return Ok(Some(values));
     }
-    Ok(Some(Factor::Llt(Cholesky {
-        symbolic: symbolic.clone(),
-        values,
-    })))
+    buffers.values = values;
+    Ok(None)
 }
 
 /// `L D Lᵀ` of `a` on the Cholesky structure, if it exists and solves `a x = a·1` accurately.
@@ -351,21 +361,17 @@ fn ldlt(
     buffers: &mut Buffers,
 ) -> Result<Option<Factor>, Singular> {
     let par = faer::get_global_parallelism();
-    let mut values = buffers.values(symbolic.len_val());
     let req = symbolic.factorize_numeric_ldlt_scratch::<f64>(par, Default::default());
-    let factored = symbolic.factorize_numeric_ldlt::<f64>(
-        &mut values,
-        a,
-        Side::Lower,
-        Default::default(),
-        par,
-        MemStack::new(buffers.scratch(req)?),
-        Default::default(),
-    );
-    if factored.is_err() {
-        buffers.values = values;
+    let Some(values) = numeric(symbolic, buffers, req, |values, stack| {
+        let side = Side::Lower;
+        let (regularization, params) = (Default::default(), Default::default());
+        symbolic
+            .factorize_numeric_ldlt::<f64>(values, a, side, regularization, par, stack, params)
+            .is_ok()
+    })?
+    else {
         return Ok(None);
-    }
+    };
     let factor = Factor::Ldlt(Cholesky {
         symbolic: symbolic.clone(),
         values,
