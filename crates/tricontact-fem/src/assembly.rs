@@ -262,6 +262,9 @@ impl Pattern {
 
     /// Builds the pattern from the node adjacency of the body elements of `an` (see
     /// [`node_adjacency`]).
+    ///
+    /// # Panics
+    /// If two nodes of a body element are not adjacent in `adj`.
     #[must_use]
     pub fn from_adjacency(adj: &[Vec<usize>], an: &Analysis, dm: &DofMap) -> Self {
         let elements: Vec<&[usize]> = an
@@ -295,49 +298,27 @@ impl Pattern {
             col_ptr.push(row_idx.len());
         }
         let symbolic = SymbolicSparseColMat::new_checked(dm.n_eq, dm.n_eq, col_ptr, None, row_idx);
-        let mut block_starts = Vec::with_capacity(elements.len() + 1);
-        block_starts.push(0);
+        let mut block_starts = vec![0];
+        let mut total = 0;
         for nodes in elements {
-            block_starts.push(block_starts.last().copied().unwrap_or(0) + nodes.len().pow(2));
+            total += nodes.len().pow(2);
+            block_starts.push(total);
         }
-        let mut pattern = Self {
-            symbolic,
-            blocks: vec![0; block_starts.last().copied().unwrap_or(0)],
-            block_starts,
-        };
+        let mut blocks = vec![0; total];
         let mut parts = Vec::with_capacity(elements.len());
-        let mut rest = std::mem::take(&mut pattern.blocks);
-        {
-            let mut tail = rest.as_mut_slice();
-            for nodes in elements {
-                let (part, after) = tail.split_at_mut(nodes.len().pow(2));
-                parts.push((*nodes, part));
-                tail = after;
-            }
-            parts
-                .into_par_iter()
-                .for_each(|(nodes, part)| pattern.fill_blocks(dm, nodes, part));
+        let mut rest = blocks.as_mut_slice();
+        for nodes in elements {
+            let (part, after) = rest.split_at_mut(nodes.len().pow(2));
+            parts.push((*nodes, part));
+            rest = after;
         }
-        pattern.blocks = rest;
-        pattern
-    }
-
-    /// The block offsets of an element with `nodes` (see [`Pattern::blocks`]) into `out`.
-    fn fill_blocks(&self, dm: &DofMap, nodes: &[usize], out: &mut [u32]) {
-        let first_free = |a: usize| (0..3).map(|i| dm.eq[3 * a + i]).find(|&e| e != NO_EQ);
-        let n = nodes.len();
-        for (lb, &b) in nodes.iter().enumerate() {
-            let Some(col) = first_free(b) else { continue };
-            let start = self.symbolic.col_ptr()[col];
-            for (la, &a) in nodes.iter().enumerate() {
-                if let Some(row) = first_free(a) {
-                    let at = self
-                        .find(row, col)
-                        .expect("an element's nodes are adjacent");
-                    out[la * n + lb] =
-                        u32::try_from(at - start).expect("a column of fewer than 2³² entries");
-                }
-            }
+        parts
+            .into_par_iter()
+            .for_each(|(nodes, part)| fill_blocks(&symbolic, dm, nodes, part));
+        Self {
+            symbolic,
+            blocks,
+            block_starts,
         }
     }
 
@@ -350,12 +331,40 @@ impl Pattern {
     #[inline]
     #[must_use]
     pub fn find(&self, row: usize, col: usize) -> Option<usize> {
-        let start = self.symbolic.col_ptr()[col];
-        let end = self.symbolic.col_ptr()[col + 1];
-        self.symbolic.row_idx()[start..end]
-            .binary_search(&row)
-            .ok()
-            .map(|p| start + p)
+        position(&self.symbolic, row, col)
+    }
+}
+
+/// Position of `(row, col)` in the value array of `symbolic` (sorted row indices).
+fn position(symbolic: &SymbolicSparseColMat<usize>, row: usize, col: usize) -> Option<usize> {
+    let start = symbolic.col_ptr()[col];
+    let end = symbolic.col_ptr()[col + 1];
+    symbolic.row_idx()[start..end]
+        .binary_search(&row)
+        .ok()
+        .map(|p| start + p)
+}
+
+/// The block offsets of an element with `nodes` (see [`Pattern::blocks`]) in `symbolic`, into
+/// `out`.
+fn fill_blocks(
+    symbolic: &SymbolicSparseColMat<usize>,
+    dm: &DofMap,
+    nodes: &[usize],
+    out: &mut [u32],
+) {
+    let first_free = |a: usize| (0..3).map(|i| dm.eq[3 * a + i]).find(|&e| e != NO_EQ);
+    let n = nodes.len();
+    for (lb, &b) in nodes.iter().enumerate() {
+        let Some(col) = first_free(b) else { continue };
+        let start = symbolic.col_ptr()[col];
+        for (la, &a) in nodes.iter().enumerate() {
+            if let Some(row) = first_free(a) {
+                let at = position(symbolic, row, col).expect("an element's nodes are adjacent");
+                out[la * n + lb] =
+                    u32::try_from(at - start).expect("a column of fewer than 2³² entries");
+            }
+        }
     }
 }
 
