@@ -34,7 +34,7 @@ use crate::search::{Bvh, Query, Surface};
 pub const PROJECTION_TOLERANCE: f64 = 1e-9;
 
 /// Relative margin of the search's certificate (see [`choose_facet`]), on the extent of the master
-/// surface and the magnitude of the node's coordinates.
+/// surface and the magnitude of the coordinates.
 const MARGIN: f64 = 1e-7;
 
 /// The facet `slave` is constrained against, with the evaluated node–facet pair, or `None` when the
@@ -50,8 +50,8 @@ const MARGIN: f64 = 1e-7;
 /// `6·10⁻⁹` of the facet's size). So when the best facet among those within a reach `ρ` has
 /// `|P| ≤ ρ − μ`, every facet beyond `ρ` has `|P_f| > ρ − μ/2` and can neither beat nor tie it:
 /// the answer is that of all facets within `radius`. The margin `μ` is [`MARGIN`] times the
-/// extent of the surface plus the magnitude of the node's coordinates, far above the tolerance's
-/// offset and the rounding of `P` and `d_f`. The reach starts at the distance to the closest facet
+/// extent of the surface plus the magnitudes of the coordinates of the node and of its closest
+/// point on the surface, far above the tolerance's offset and the rounding of `P` and `d_f`. The reach starts at the distance to the closest facet
 /// (plus `2μ`) and grows, by at least an eighth of `radius`, until that holds or it is `radius`.
 /// On the fine Hertz example (a rigid flat meshed finer under the sphere than away from it, the
 /// radius its longest edge) a node met 314 facets within `radius` on average.
@@ -80,7 +80,7 @@ pub fn choose_facet(
         return best_within(surface, bvh, positions, &query, radius);
     }
     let nearest = bvh.closest(surface, &query, radius)?;
-    let margin = MARGIN * (bvh.extent() + x.amax());
+    let margin = MARGIN * (bvh.extent() + x.amax() + nearest.closest.point.amax());
     let mut reach = nearest.closest.distance + 2.0 * margin;
     loop {
         reach = reach.min(radius);
