@@ -281,9 +281,10 @@ fn choose_among_all(
 }
 
 /// The search over a growing reach chooses what the rule chooses among all facets within the
-/// radius, facet and gap bit for bit: on a graded, bumpy master (cells from 0.02 to 0.5, the
-/// radius its longest edge), a convex ridge, a valley and a torus (with a part of the slave nodes
-/// on it: self-contact), for nodes above, below and beyond the master, on its vertices and edges.
+/// radius, facet and gap bit for bit: on a graded, bumpy master (cells from 0.01 to 0.39, the
+/// radius its longest edge), a convex ridge, a valley, a torus (with a part of the slave nodes on
+/// it: self-contact) and two stacked plates, for nodes above, below and beyond the master, on its
+/// vertices and edges.
 /// Enough of them are answered beyond their closest facet, and enough find none, for the
 /// reach's growth to be exercised.
 #[test]
