@@ -210,11 +210,14 @@ impl DofMap {
 /// elements.
 #[must_use]
 pub fn node_adjacency(an: &Analysis) -> Vec<Vec<usize>> {
-    let elements = an
-        .body
+    adjacency(an.mesh.nodes.len(), body_nodes(an))
+}
+
+/// The nodes of each body element, in the order of `an.body` (the order of assembly).
+fn body_nodes(an: &Analysis) -> impl Iterator<Item = &[usize]> {
+    an.body
         .iter()
-        .map(|be| &an.mesh.elements[be.element].nodes[..]);
-    adjacency(an.mesh.nodes.len(), elements)
+        .map(|be| &an.mesh.elements[be.element].nodes[..])
 }
 
 /// Sorted neighbour lists (self included) of `n_nodes` nodes through `elements` (their nodes).
@@ -267,11 +270,7 @@ impl Pattern {
     /// If two nodes of a body element are not adjacent in `adj`.
     #[must_use]
     pub fn from_adjacency(adj: &[Vec<usize>], an: &Analysis, dm: &DofMap) -> Self {
-        let elements: Vec<&[usize]> = an
-            .body
-            .iter()
-            .map(|be| &an.mesh.elements[be.element].nodes[..])
-            .collect();
+        let elements: Vec<&[usize]> = body_nodes(an).collect();
         Self::from_elements(adj, &elements, dm)
     }
 
@@ -516,7 +515,7 @@ pub fn assemble(
     })
 }
 
-/// Adds the element tangents `(nodes, k)` into the pattern's `values` and, for prescribed
+/// Adds the element tangents into the pattern's `values` and, for prescribed
 /// columns with an increment in `dup`, `−k·Δu_p` into `predictor`: the columns in one range per
 /// thread, of about as many values each (each value belongs to one column, so each range writes
 /// its own part of `values`, element after element in the same order as one thread would: the

@@ -375,6 +375,19 @@ fn the_growing_reach_chooses_what_all_facets_within_the_radius_choose() {
                 all[slave as usize]
             );
             compared += 1;
+            // Without a finite positive radius there is no reach to grow: every facet (∞), or
+            // those at distance 0, as the rule has them.
+            if slave % 5 == 0 {
+                for radius in [f64::INFINITY, 0.0] {
+                    let got = choose_facet(&surface, &bvh, &all, slave, radius);
+                    let want = choose_among_all(&surface, &bvh, &all, slave, radius);
+                    assert_eq!(
+                        got.map(|(f, p)| (f, p.gap().to_bits())),
+                        want.map(|(f, g)| (f, g.to_bits())),
+                        "scene {scene}, slave {slave}, radius {radius}"
+                    );
+                }
+            }
             let query = tricontact::search::Query {
                 point: all[slave as usize],
                 exclude: Some(slave),
