@@ -205,152 +205,83 @@ pub fn solve_increment(
     solver: &mut LinearSolver,
 ) -> Result<Converged, Failure> {
     let (an, dm) = (p.an, p.dm);
-    let nlgeom = p.step.nlgeom;
     let structure = structure(extra, p.follower);
-    let mut u = start.to_vec();
-    let mut dup = vec![0.0; u.len()];
-    for &(dof, v) in p.prescribed {
-        dup[dof] = v - start[dof];
-    }
+    let weights = Weights::new(dm, &extra.residual_scales());
     let fext_norm = norm(
         (0..dm.eq.len())
             .filter(|&d| dm.eq[d] != NO_EQ)
             .map(|d| p.fext[d]),
     );
-    let inverted = |e: usize| Failure::Inverted(an.mesh.elements[an.body[e].element].tag);
-    let weights = Weights::new(dm, &extra.residual_scales());
-
-    let mut residuals = Vec::new();
-    let mut reference = fext_norm.max(SCALE_FRACTION * p.force_scale);
-    let mut du_norm = 0.0;
-    // The weighted norm of the last correction in full (a line search applies a fraction of it).
-    let mut full_norm = 0.0;
-    let mut method = "none";
-    let mut iterations = 0usize;
-    let mut predictor = true;
-    let mut notes = Vec::new();
+    let mut it = Iterate::new(start, fext_norm.max(SCALE_FRACTION * p.force_scale));
     // Line search where the residual is an energy gradient: the correction being applied.
     let searching = p.step.line_search && structure == Structure::SymmetricDefinite;
-    let mut search: Option<LineSearch> = None;
-    let mut line_searches = 0;
     // Small strain without extra or follower terms: the tangent is constant,
     // so the prescribed values are applied directly (the residual then
     // contains `K_fp Δu_p` exactly) and one factorization serves the step.
-    let constant_tangent = !nlgeom && !extra.nonlinear() && p.follower.is_empty();
-    if constant_tangent {
-        for &(dof, v) in p.prescribed {
-            u[dof] = v;
+    // Otherwise the predictor adds `K_fp Δu_p` with the prescribed increments `dup`.
+    let constant_tangent = !p.step.nlgeom && !extra.nonlinear() && p.follower.is_empty();
+    let mut dup = vec![0.0; start.len()];
+    for &(dof, v) in p.prescribed {
+        if constant_tangent {
+            it.u[dof] = v;
+        } else {
+            dup[dof] = v - start[dof];
         }
-        dup.fill(0.0);
     }
     loop {
         let need_tangent = !(constant_tangent && solver.cached.is_some());
-        let asm = match assemble(
+        let predictor_terms = (it.predictor && !constant_tangent).then_some(dup.as_slice());
+        let assembled = assemble(
             an,
             dm,
             p.pat,
-            &u,
-            nlgeom,
+            &it.u,
+            p.step.nlgeom,
             need_tangent,
-            (predictor && !constant_tangent).then_some(dup.as_slice()),
+            predictor_terms,
             extra,
-        ) {
+        );
+        let mut asm = match assembled {
             Ok(asm) => asm,
-            Err(AssemblyError::Inverted(i)) => {
-                // A line search halves a correction that inverts an element.
-                if let Some(ls) = search.as_mut()
-                    && let Some(s) = ls.next(None)
-                {
-                    du_norm = ls.move_to(s, &mut u, dm) * full_norm;
-                    line_searches += 1;
-                    continue;
-                }
-                return Err(inverted(i));
+            // A line search halves a correction that inverts an element.
+            Err(AssemblyError::Inverted(_)) if it.search_step(dm, None) => continue,
+            Err(AssemblyError::Inverted(e)) => {
+                return Err(Failure::Inverted(an.mesh.elements[an.body[e].element].tag));
             }
             Err(AssemblyError::Extra(m)) => return Err(Failure::Diverged(m)),
         };
-        let mut asm = asm;
-        add_follower_terms(p, &u, &mut asm);
-        let mut r = asm.residual.clone();
-        for (ri, fi) in r.iter_mut().zip(p.fext) {
-            *ri -= fi;
-        }
-        let mut rhs = free_entries(dm, &r);
-        for b in &mut rhs {
-            *b = -*b;
-        }
-        let rnorm = weighted(&rhs, &weights.residual);
-        if predictor {
+        add_follower_terms(p, &it.u, &mut asm);
+        let Residual {
+            r,
+            mut rhs,
+            norm: rnorm,
+            reactions,
+        } = residual(p, &asm, &weights);
+        if it.predictor {
             for (b, q) in rhs.iter_mut().zip(&asm.predictor) {
                 *b += q;
             }
         }
-        let react = norm((0..dm.n_nodal).filter(|&d| dm.eq[d] == NO_EQ).map(|d| r[d]));
         let current = weighted(&rhs, &weights.residual);
-        if let Some(ls) = search.as_mut()
-            && let Some(s) = ls.next(Some(ls.slope(&rhs)).filter(|g| g.is_finite()))
-        {
-            du_norm = ls.move_to(s, &mut u, dm) * full_norm;
-            line_searches += 1;
+        if it.search_step(dm, Some(&rhs)) {
             continue;
         }
-        search = None;
+        it.search = None;
         if !current.is_finite() {
             return Err(Failure::Diverged("non-finite residual".into()));
         }
         if let Some(n) = extra.iteration_note() {
-            notes.push(n);
+            it.notes.push(n);
         }
-        residuals.push(current);
-        reference = reference.max(react).max(residuals[0]);
-        if !predictor {
-            let prev = residuals[residuals.len() - 2];
-            let ratio = if prev > 0.0 {
-                (rnorm / prev).min(1.0)
-            } else {
-                0.0
-            };
-            let w = &weights.dof;
-            let du_total = norm(u.iter().zip(u0).zip(w).map(|((a, b), w)| (a - b) * w))
-                .max(1e-3 * weighted(&u, w));
-            let residual_met = rnorm <= p.step.residual_tolerance * reference;
-            if residual_met && du_norm * ratio <= p.step.displacement_tolerance * du_total {
-                return Ok(Converged {
-                    u,
-                    residual: r,
-                    residuals,
-                    reference,
-                    iterations,
-                    method,
-                    line_searches,
-                    notes,
-                });
-            }
-            if rnorm > 1e6 * reference {
-                return Err(Failure::Diverged(format!(
-                    "residual grew to {rnorm:.3e} (reference {reference:.3e})"
-                )));
-            }
-            if iterations >= p.step.max_iterations {
-                return Err(not_converged(
-                    p.step,
-                    iterations,
-                    residual_met,
-                    rnorm / reference,
-                    du_norm * ratio / du_total,
-                ));
-            }
-        } else if current == 0.0 && dup.iter().all(|&d| d == 0.0) {
-            return Ok(Converged {
-                u,
-                residual: r,
-                residuals,
-                reference,
-                iterations,
-                method,
-                line_searches,
-                notes,
-            });
+        it.residuals.push(current);
+        it.reference = it.reference.max(reactions).max(it.residuals[0]);
+        let done = if it.predictor {
+            current == 0.0 && dup.iter().all(|&d| d == 0.0)
+        } else {
+            it.converged_at(p.step, u0, &weights.dof, rnorm)?
+        };
+        if done {
+            return Ok(it.converged(r));
         }
         if need_tangent {
             factor_tangent(p.pat, &mut asm, &weights, structure, solver)?;
@@ -359,25 +290,188 @@ pub fn solve_increment(
         if !constant_tangent && let Some(f) = solver.cached.take() {
             solver.recycle(f);
         }
-        let (du, m) = solved?;
-        method = m;
-        for (dof, &e) in dm.eq.iter().enumerate() {
+        let (du, method) = solved?;
+        it.method = method;
+        it.apply(p, du, &rhs, &weights, searching);
+    }
+}
+
+/// The state of an increment's iterations.
+struct Iterate {
+    /// The present iterate (global DOFs and extra unknowns).
+    u: Vec<f64>,
+    /// Weighted residual norms: the predictor's, then each iteration's.
+    residuals: Vec<f64>,
+    /// `r_ref` of the relative residual test (module documentation).
+    reference: f64,
+    /// Weighted norm of the last correction as applied.
+    du_norm: f64,
+    /// Weighted norm of the last correction in full (a line search applies a fraction of it).
+    full_norm: f64,
+    /// The last factorization's method.
+    method: &'static str,
+    /// Linear solves so far.
+    iterations: usize,
+    /// `true` until the predictor's correction is applied.
+    predictor: bool,
+    /// The extra terms' notes, one per iteration that has one.
+    notes: Vec<String>,
+    /// The line search along the last correction, while it runs.
+    search: Option<LineSearch>,
+    /// Line-search trials so far.
+    line_searches: usize,
+}
+
+impl Iterate {
+    fn new(start: &[f64], reference: f64) -> Self {
+        Self {
+            u: start.to_vec(),
+            residuals: Vec::new(),
+            reference,
+            du_norm: 0.0,
+            full_norm: 0.0,
+            method: "none",
+            iterations: 0,
+            predictor: true,
+            notes: Vec::new(),
+            search: None,
+            line_searches: 0,
+        }
+    }
+
+    /// Moves `u` to the line search's next trial, if one runs and asks for one (`rhs`, the
+    /// residual's right-hand side at `u`, gives the slope; `None` where `u` inverted an element).
+    fn search_step(&mut self, dm: &DofMap, rhs: Option<&[f64]>) -> bool {
+        let Some(ls) = self.search.as_mut() else {
+            return false;
+        };
+        let slope = rhs.map(|r| ls.slope(r)).filter(|g| g.is_finite());
+        let Some(s) = ls.next(slope) else {
+            return false;
+        };
+        self.du_norm = ls.move_to(s, &mut self.u, dm) * self.full_norm;
+        self.line_searches += 1;
+        true
+    }
+
+    /// Whether an iteration after the predictor, its free residual's weighted norm `rnorm`, meets
+    /// both tests of the module documentation.
+    ///
+    /// # Errors
+    /// A residual above 10⁶ `r_ref`, or no iterations left.
+    fn converged_at(
+        &self,
+        step: &Step,
+        u0: &[f64],
+        dof_weights: &[f64],
+        rnorm: f64,
+    ) -> Result<bool, Failure> {
+        let prev = self.residuals[self.residuals.len() - 2];
+        let ratio = if prev > 0.0 {
+            (rnorm / prev).min(1.0)
+        } else {
+            0.0
+        };
+        let du_total = norm(
+            self.u
+                .iter()
+                .zip(u0)
+                .zip(dof_weights)
+                .map(|((a, b), w)| (a - b) * w),
+        )
+        .max(1e-3 * weighted(&self.u, dof_weights));
+        let reference = self.reference;
+        let residual_met = rnorm <= step.residual_tolerance * reference;
+        if residual_met && self.du_norm * ratio <= step.displacement_tolerance * du_total {
+            return Ok(true);
+        }
+        if rnorm > 1e6 * reference {
+            return Err(Failure::Diverged(format!(
+                "residual grew to {rnorm:.3e} (reference {reference:.3e})"
+            )));
+        }
+        if self.iterations >= step.max_iterations {
+            return Err(not_converged(
+                step,
+                self.iterations,
+                residual_met,
+                rnorm / reference,
+                self.du_norm * ratio / du_total,
+            ));
+        }
+        Ok(false)
+    }
+
+    /// Adds the correction `du` (free equations) to `u`; after the predictor, sets the prescribed
+    /// values and, with `searching`, starts a line search along `du`.
+    fn apply(
+        &mut self,
+        p: &IncrementProblem<'_>,
+        du: Vec<f64>,
+        rhs: &[f64],
+        weights: &Weights,
+        searching: bool,
+    ) {
+        for (dof, &e) in p.dm.eq.iter().enumerate() {
             if e != NO_EQ {
-                u[dof] += du[e];
+                self.u[dof] += du[e];
             }
         }
-        full_norm = divided(&du, &weights.residual);
-        du_norm = full_norm;
-        if searching && !predictor {
-            search = Some(LineSearch::new(du, &rhs));
-        }
-        if predictor {
+        self.full_norm = divided(&du, &weights.residual);
+        self.du_norm = self.full_norm;
+        if self.predictor {
             for &(dof, v) in p.prescribed {
-                u[dof] = v;
+                self.u[dof] = v;
             }
-            predictor = false;
+            self.predictor = false;
+        } else if searching {
+            self.search = Some(LineSearch::new(du, rhs));
         }
-        iterations += 1;
+        self.iterations += 1;
+    }
+
+    /// The converged increment, with `residual` the full residual at `u`.
+    fn converged(self, residual: Vec<f64>) -> Converged {
+        Converged {
+            u: self.u,
+            residual,
+            residuals: self.residuals,
+            reference: self.reference,
+            iterations: self.iterations,
+            method: self.method,
+            line_searches: self.line_searches,
+            notes: self.notes,
+        }
+    }
+}
+
+/// An assembly's residual: `r = f_int − f_ext (+ extra)` over all global DOFs, the right-hand
+/// side `−r_f` at the free equations, its weighted norm and the norm of the reactions (`r` at the
+/// prescribed DOFs).
+struct Residual {
+    r: Vec<f64>,
+    rhs: Vec<f64>,
+    norm: f64,
+    reactions: f64,
+}
+
+fn residual(p: &IncrementProblem<'_>, asm: &Assembled, weights: &Weights) -> Residual {
+    let dm = p.dm;
+    let mut r = asm.residual.clone();
+    for (ri, fi) in r.iter_mut().zip(p.fext) {
+        *ri -= fi;
+    }
+    let mut rhs = free_entries(dm, &r);
+    for b in &mut rhs {
+        *b = -*b;
+    }
+    let norm_free = weighted(&rhs, &weights.residual);
+    let reactions = norm((0..dm.n_nodal).filter(|&d| dm.eq[d] == NO_EQ).map(|d| r[d]));
+    Residual {
+        r,
+        rhs,
+        norm: norm_free,
+        reactions,
     }
 }
 
