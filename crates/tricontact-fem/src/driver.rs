@@ -279,142 +279,193 @@ pub fn run(
     observer: &mut dyn FnMut(&IncrementInfo<'_>) -> Result<()>,
 ) -> Result<RunSummary> {
     let n_dofs = an.num_nodal_dofs() + extra.num_extra();
-    let mut u = vec![0.0; n_dofs];
-    let mut summary = RunSummary::default();
-    let mut prev_mask: Vec<bool> = Vec::new();
-    let mut last_reactions = vec![0.0; n_dofs];
-    // The force scale `q̄` of the last step (see `newton`): the first increment of a step uses it.
-    let mut carried_scale = 0.0;
-    for (s, step) in an.steps.iter().enumerate() {
-        let (mask, targets) = step_constraints(an, s);
-        if !extra.supports_bodies() {
-            check_supports(an, &mask)
-                .map_err(|m| FemError::Singular(format!("step '{}': {m}", step.name)))?;
-        }
-        let dm = DofMap::new(&an.active_nodes, &mask, extra.num_extra());
-        let adj = node_adjacency(an);
-        let pat = Pattern::from_adjacency(&adj, an, &dm);
-        let order = equation_order(&an.mesh.nodes, &adj, &dm, &extra.extra_nodes());
-        let mut solver = LinearSolver::new().with_order(order);
-        drop(adj);
-        let u_step = u.clone();
-        // Reactions of DOFs released at this step are ramped down to zero.
-        let released: Vec<(usize, f64)> = (0..an.num_nodal_dofs())
-            .filter(|&d| prev_mask.get(d).copied().unwrap_or(false) && !mask[d])
-            .map(|d| (d, last_reactions[d]))
-            .collect();
-        let mut control = IncrementControl::new(step.increments, step.max_cutbacks);
-        let mut t = 0.0;
-        let mut increment = 0;
-        let mut attempts: Vec<(f64, String)> = Vec::new();
-        // The last converged increment of this step: `u_n − u_{n−1}` and its `Δt`.
-        let mut last: Option<(Vec<f64>, f64)> = None;
-        // `∫ r_ref dt` over the step's converged increments, for the force scale `q̄`.
-        let mut reference_integral = 0.0;
-        while t < 1.0 - 1e-12 {
-            let t_new = control.target(t);
-            let mut fext = external_forces(an, n_dofs, s, t_new);
-            for &(d, r) in &released {
-                fext[d] += (1.0 - t_new) * r;
-            }
-            let prescribed: Vec<(usize, f64)> = targets
-                .iter()
-                .map(|&(dof, v)| (dof, u_step[dof] + t_new * (v - u_step[dof])))
-                .collect();
-            let follower = follower_pressures(an, s, t_new);
-            let problem = IncrementProblem {
-                an,
-                dm: &dm,
-                pat: &pat,
-                step,
-                fext: &fext,
-                prescribed: &prescribed,
-                follower: &follower,
-                force_scale: if t > 0.0 {
-                    reference_integral / t
-                } else {
-                    carried_scale
-                },
-            };
-            let start = match (&last, step.extrapolation, attempts.is_empty()) {
-                (Some((du, dt)), Extrapolation::Linear, true) => {
-                    extrapolated(&u, du, (t_new - t) / dt)
-                }
-                _ => u.clone(),
-            };
-            match solve_with_outer(&problem, extra, &u, &start, &mut solver) {
-                Ok(c) => {
-                    extra.commit();
-                    let du = c.u.iter().zip(&u).map(|(a, b)| a - b).collect();
-                    last = Some((du, t_new - t));
-                    reference_integral += c.reference * (t_new - t);
-                    u = c.u;
-                    t = t_new;
-                    increment += 1;
-                    summary.increments += 1;
-                    summary.iterations += c.iterations;
-                    let mut reactions = vec![0.0; n_dofs];
-                    for &(dof, _) in &targets {
-                        reactions[dof] = c.residual[dof];
-                    }
-                    last_reactions.clone_from(&reactions);
-                    let point_fields = extra.point_fields();
-                    let history = extra.history();
-                    observer(&IncrementInfo {
-                        step: s,
-                        step_name: &step.name,
-                        increment,
-                        load_factor: t,
-                        time: s as f64 + t,
-                        iterations: c.iterations,
-                        line_searches: c.line_searches,
-                        residuals: &c.residuals,
-                        reference: c.reference,
-                        cutbacks: control.cutbacks_here,
-                        u: &u,
-                        reactions: &reactions,
-                        nlgeom: step.nlgeom,
-                        method: c.method,
-                        notes: &c.notes,
-                        point_fields: &point_fields,
-                        history: &history,
-                        attempts: &attempts,
-                    })?;
-                    attempts.clear();
-                    control.converged();
-                }
-                Err(failure) => {
-                    let hint = failure_hint(&failure, extra, &dm);
-                    extra.restore();
-                    if let (Failure::Singular(m), false) = (&failure, step.nlgeom) {
-                        return Err(FemError::Singular(format!(
-                            "step '{}': {m}{hint}",
-                            step.name
-                        )));
-                    }
-                    summary.cutbacks += 1;
-                    attempts.push((t_new, failure.to_string()));
-                    if !control.failed() {
-                        let searchable =
-                            structure(extra, &follower) == Structure::SymmetricDefinite;
-                        let search_hint = line_search_hint(&failure, step, searchable);
-                        return Err(FemError::NotConverged {
-                            step: step.name.clone(),
-                            load_factor: t,
-                            target: t_new,
-                            reason: format!("{failure}{hint}{search_hint}"),
-                            exhausted: control.exhausted(),
-                            attempts: std::mem::take(&mut attempts),
-                        });
-                    }
-                }
-            }
-        }
-        prev_mask = mask;
-        carried_scale = reference_integral / t;
+    let mut carried = Carried {
+        summary: RunSummary {
+            u: vec![0.0; n_dofs],
+            ..RunSummary::default()
+        },
+        mask: Vec::new(),
+        reactions: vec![0.0; n_dofs],
+        force_scale: 0.0,
+    };
+    for s in 0..an.steps.len() {
+        run_step(an, s, extra, &mut carried, observer)?;
     }
-    summary.u = u;
-    Ok(summary)
+    Ok(carried.summary)
+}
+
+/// What one step hands to the next.
+struct Carried {
+    /// The run's totals so far, with the committed state `u`.
+    summary: RunSummary,
+    /// The constrained DOFs of the last step (empty before the first).
+    mask: Vec<bool>,
+    /// The reactions of the last converged increment, global DOFs.
+    reactions: Vec<f64>,
+    /// The force scale `q̄` of the last step (see `newton`): the first increment of a step uses it.
+    force_scale: f64,
+}
+
+/// Runs step `s` from the committed state in `carried`, increment by increment with cutbacks.
+fn run_step(
+    an: &Analysis,
+    s: usize,
+    extra: &mut dyn ExtraTerms,
+    carried: &mut Carried,
+    observer: &mut dyn FnMut(&IncrementInfo<'_>) -> Result<()>,
+) -> Result<()> {
+    let step = &an.steps[s];
+    let (mask, targets) = step_constraints(an, s);
+    if !extra.supports_bodies() {
+        check_supports(an, &mask)
+            .map_err(|m| FemError::Singular(format!("step '{}': {m}", step.name)))?;
+    }
+    let dm = DofMap::new(&an.active_nodes, &mask, extra.num_extra());
+    let adj = node_adjacency(an);
+    let pat = Pattern::from_adjacency(&adj, an, &dm);
+    let order = equation_order(&an.mesh.nodes, &adj, &dm, &extra.extra_nodes());
+    let mut solver = LinearSolver::new().with_order(order);
+    drop(adj);
+    let u_step = carried.summary.u.clone();
+    // Reactions of DOFs released at this step are ramped down to zero.
+    let released: Vec<(usize, f64)> = (0..an.num_nodal_dofs())
+        .filter(|&d| carried.mask.get(d).copied().unwrap_or(false) && !mask[d])
+        .map(|d| (d, carried.reactions[d]))
+        .collect();
+    let mut control = IncrementControl::new(step.increments, step.max_cutbacks);
+    let mut t = 0.0;
+    let mut increment = 0;
+    let mut attempts: Vec<(f64, String)> = Vec::new();
+    // The last converged increment of this step: `u_n − u_{n−1}` and its `Δt`.
+    let mut last: Option<(Vec<f64>, f64)> = None;
+    // `∫ r_ref dt` over the step's converged increments, for the force scale `q̄`.
+    let mut reference_integral = 0.0;
+    while t < 1.0 - 1e-12 {
+        let t_new = control.target(t);
+        let mut fext = external_forces(an, carried.summary.u.len(), s, t_new);
+        for &(d, r) in &released {
+            fext[d] += (1.0 - t_new) * r;
+        }
+        let prescribed: Vec<(usize, f64)> = targets
+            .iter()
+            .map(|&(dof, v)| (dof, u_step[dof] + t_new * (v - u_step[dof])))
+            .collect();
+        let follower = follower_pressures(an, s, t_new);
+        let problem = IncrementProblem {
+            an,
+            dm: &dm,
+            pat: &pat,
+            step,
+            fext: &fext,
+            prescribed: &prescribed,
+            follower: &follower,
+            force_scale: if t > 0.0 {
+                reference_integral / t
+            } else {
+                carried.force_scale
+            },
+        };
+        let u = &carried.summary.u;
+        let start = match (&last, step.extrapolation, attempts.is_empty()) {
+            (Some((du, dt)), Extrapolation::Linear, true) => extrapolated(u, du, (t_new - t) / dt),
+            _ => u.clone(),
+        };
+        match solve_with_outer(&problem, extra, u, &start, &mut solver) {
+            Ok(c) => {
+                extra.commit();
+                let du = c.u.iter().zip(u).map(|(a, b)| a - b).collect();
+                last = Some((du, t_new - t));
+                reference_integral += c.reference * (t_new - t);
+                t = t_new;
+                increment += 1;
+                let summary = &mut carried.summary;
+                summary.increments += 1;
+                summary.iterations += c.iterations;
+                carried.reactions.fill(0.0);
+                for &(dof, _) in &targets {
+                    carried.reactions[dof] = c.residual[dof];
+                }
+                summary.u = c.u;
+                let point_fields = extra.point_fields();
+                let history = extra.history();
+                observer(&IncrementInfo {
+                    step: s,
+                    step_name: &step.name,
+                    increment,
+                    load_factor: t,
+                    time: s as f64 + t,
+                    iterations: c.iterations,
+                    line_searches: c.line_searches,
+                    residuals: &c.residuals,
+                    reference: c.reference,
+                    cutbacks: control.cutbacks_here,
+                    u: &summary.u,
+                    reactions: &carried.reactions,
+                    nlgeom: step.nlgeom,
+                    method: c.method,
+                    notes: &c.notes,
+                    point_fields: &point_fields,
+                    history: &history,
+                    attempts: &attempts,
+                })?;
+                attempts.clear();
+                control.converged();
+            }
+            Err(failure) => {
+                carried.summary.cutbacks += 1;
+                cut_back(
+                    &problem,
+                    (t, t_new),
+                    failure,
+                    extra,
+                    &mut control,
+                    &mut attempts,
+                )?;
+            }
+        }
+    }
+    carried.mask = mask;
+    carried.force_scale = reference_integral / t;
+    Ok(())
+}
+
+/// After the attempt at `t_new` from `t` failed: restores the extra terms' state and records the
+/// attempt for a retry with a smaller increment.
+///
+/// # Errors
+/// A singular tangent of a small-strain step (a smaller increment cannot help), or the step's
+/// cutbacks used up.
+fn cut_back(
+    problem: &IncrementProblem<'_>,
+    (t, t_new): (f64, f64),
+    failure: Failure,
+    extra: &mut dyn ExtraTerms,
+    control: &mut IncrementControl,
+    attempts: &mut Vec<(f64, String)>,
+) -> Result<()> {
+    let step = problem.step;
+    let hint = failure_hint(&failure, extra, problem.dm);
+    extra.restore();
+    if let (Failure::Singular(m), false) = (&failure, step.nlgeom) {
+        return Err(FemError::Singular(format!(
+            "step '{}': {m}{hint}",
+            step.name
+        )));
+    }
+    attempts.push((t_new, failure.to_string()));
+    if control.failed() {
+        return Ok(());
+    }
+    let searchable = structure(extra, problem.follower) == Structure::SymmetricDefinite;
+    let search_hint = line_search_hint(&failure, step, searchable);
+    Err(FemError::NotConverged {
+        step: step.name.clone(),
+        load_factor: t,
+        target: t_new,
+        reason: format!("{failure}{hint}{search_hint}"),
+        exhausted: control.exhausted(),
+        attempts: std::mem::take(attempts),
+    })
 }
 
 /// What to add to a failure's reason: for a singular tangent with extra unknowns
