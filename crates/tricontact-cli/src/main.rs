@@ -242,8 +242,14 @@ fn verbose_lines(info: &IncrementInfo<'_>, previous: f64) -> Vec<String> {
         .attempts
         .iter()
         .map(|&(t, ref why)| {
+            // Every failed attempt is cut back but the one after which the line search came on.
+            let outcome = if why.ends_with(driver::LINE_SEARCH_SWITCH) {
+                "failed"
+            } else {
+                "cut back"
+            };
             format!(
-                "step {} '{}' attempt t = {} cut back: {why}",
+                "step {} '{}' attempt t = {} {outcome}: {why}",
                 info.step + 1,
                 info.step_name,
                 load_factor_text(t, t - previous, 4)
@@ -379,8 +385,13 @@ fn run(
                 .join(", ")
         );
     }
+    let switched = match summary.line_search_switches {
+        0 => String::new(),
+        1 => ", line search switched on in 1 step".to_string(),
+        n => format!(", line search switched on in {n} steps"),
+    };
     say!(
-        "done: {} increments, {} Newton iterations, {} cutbacks; results in {}",
+        "done: {} increments, {} Newton iterations, {} cutbacks{switched}; results in {}",
         summary.increments,
         summary.iterations,
         summary.cutbacks,

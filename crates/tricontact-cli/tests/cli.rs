@@ -463,11 +463,10 @@ fn closed_stdout_ends_quietly_without_panic() {
     assert_eq!(out.status.code(), Some(1));
 }
 
-#[test]
-fn verbose_log_names_each_cut_back_attempt() {
-    // The sliding example with a penalty needs cutbacks (VERIFICATION.md): each failed attempt is
-    // reported with its target load factor and reason before the increment that converged.
-    let out = temp_dir("cutbacks");
+/// The sliding example with a penalty, `line_search` in each step set to `line_search`, run
+/// with `--verbose` in a temporary folder named `name`: its standard output.
+fn penalty_sliding(name: &str, line_search: &str) -> String {
+    let out = temp_dir(name);
     let ex = examples_dir().join("sliding");
     let text = std::fs::read_to_string(ex.join("model.toml")).expect("model");
     let text = text
@@ -479,7 +478,11 @@ fn verbose_log_names_each_cut_back_attempt() {
                 ex.join("sliding.msh").to_str().expect("utf8")
             ),
         )
-        .replace("plots = true", "plots = false");
+        .replace("plots = true", "plots = false")
+        .replace(
+            "[[step]]",
+            &format!("[[step]]\nline_search = {line_search}"),
+        );
     let model = out.join("penalty.toml");
     std::fs::write(&model, text).expect("write");
     let stdout = run_ok(&[
@@ -489,6 +492,16 @@ fn verbose_log_names_each_cut_back_attempt() {
         "--output".as_ref(),
         out.join("results").as_os_str(),
     ]);
+    std::fs::remove_dir_all(&out).ok();
+    stdout
+}
+
+#[test]
+fn verbose_log_names_each_cut_back_attempt() {
+    // The sliding example with a penalty and no line search needs cutbacks (VERIFICATION.md):
+    // each failed attempt is reported with its target load factor and reason before the
+    // increment that converged.
+    let stdout = penalty_sliding("cutbacks", "false");
     let attempts: Vec<&str> = stdout.lines().filter(|l| l.contains("cut back:")).collect();
     assert!(!attempts.is_empty(), "{stdout}");
     assert!(
@@ -505,7 +518,32 @@ fn verbose_log_names_each_cut_back_attempt() {
         "{done} vs {}",
         attempts.len()
     );
-    std::fs::remove_dir_all(&out).ok();
+}
+
+#[test]
+fn the_automatic_line_search_is_reported_where_it_comes_on() {
+    // The same run with the default `line_search = "auto"`: the first inverted element switches
+    // the line search on; that attempt is reported as failed and retried, not cut back.
+    let stdout = penalty_sliding("auto-line-search", "\"auto\"");
+    let failed: Vec<&str> = stdout.lines().filter(|l| l.contains(" failed: ")).collect();
+    assert_eq!(failed.len(), 1, "{stdout}");
+    assert!(
+        failed[0].contains("inverted")
+            && failed[0].ends_with(
+                "retried at the same size with the line search, on for the rest of the step"
+            ),
+        "{}",
+        failed[0]
+    );
+    assert!(!stdout.contains("cut back:"), "{stdout}");
+    let done = stdout
+        .lines()
+        .find(|l| l.starts_with("done:"))
+        .expect("summary");
+    assert!(
+        done.contains("0 cutbacks, line search switched on in 1 step;"),
+        "{done}"
+    );
 }
 
 /// A run that fails after its cutbacks lists, with `--verbose`, every attempt of the increment

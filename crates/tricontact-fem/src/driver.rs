@@ -24,12 +24,19 @@
 //! slider moving on, a load growing — begins where the last increment points.
 //! The first increment of a step and the retry after a cutback start from
 //! `u_n`, as with `none`.
+//!
+//! Line search (`[[step]] line_search`): `true` and `false` hold for the whole step. With
+//! `"auto"` (the default) the step starts without it; the first attempt that fails on an
+//! inverted element where the line search applies (the residual is an energy gradient) is
+//! retried at the same size with the line search, which stays on for the rest of the step. That
+//! attempt is not a cutback (its reason ends with [`LINE_SEARCH_SWITCH`]); a line search costs
+//! iterations where Newton recovers from an overshoot by itself, which is why it does not start on.
 
 use crate::analysis::{Analysis, Load, Step};
 use crate::assembly::{DofMap, ExtraTerms, Pattern, PointField, node_adjacency};
 use crate::error::{FemError, Result};
 use crate::linsolve::{LinearSolver, Structure};
-use crate::model::Extrapolation;
+use crate::model::{Extrapolation, LineSearchMode};
 use crate::newton::{Converged, Failure, IncrementProblem, solve_increment, structure};
 use crate::ordering::equation_order;
 use crate::rigid::check_supports;
@@ -99,6 +106,8 @@ pub struct RunSummary {
     pub iterations: usize,
     /// Cutbacks.
     pub cutbacks: usize,
+    /// Steps in which `line_search = "auto"` switched the line search on.
+    pub line_search_switches: usize,
     /// Final displacements.
     pub u: Vec<f64>,
 }
@@ -264,7 +273,12 @@ const MULTIPLIER_HINT: &str = "; with Lagrange multipliers this usually means sl
 
 /// Appended to the reason a step fails on an inverted element when its line search is off and
 /// would apply (the residual is an energy gradient: no multipliers, no follower pressure).
-const LINE_SEARCH_HINT: &str = "; line_search = true in this [[step]] may get through: it shortens a Newton correction that inverts an element";
+const LINE_SEARCH_HINT: &str = "; line_search = true (or \"auto\", the default) in this [[step]] may get through: it shortens a Newton correction that inverts an element";
+
+/// Appended to the reason of an attempt after which `line_search = "auto"` switched the line
+/// search on.
+pub const LINE_SEARCH_SWITCH: &str =
+    "retried at the same size with the line search, on for the rest of the step";
 
 /// Most solves of one increment asked for by [`ExtraTerms::after_converged`].
 pub const MAX_OUTER: usize = 50;
@@ -340,6 +354,8 @@ fn run_step(
     let mut last: Option<(Vec<f64>, f64)> = None;
     // `∫ r_ref dt` over the step's converged increments, for the force scale `q̄`.
     let mut reference_integral = 0.0;
+    // Where the residual is an energy gradient: `line_search = "auto"` switches it on below.
+    let mut line_search = step.line_search == LineSearchMode::On;
     while t < 1.0 - 1e-12 {
         let t_new = control.target(t);
         let mut fext = external_forces(an, carried.summary.u.len(), s, t_new);
@@ -364,6 +380,7 @@ fn run_step(
             } else {
                 carried.force_scale
             },
+            line_search,
         };
         let u = &carried.summary.u;
         let start = match (&last, step.extrapolation, attempts.is_empty()) {
@@ -410,6 +427,13 @@ fn run_step(
                 })?;
                 attempts.clear();
                 control.converged();
+            }
+            Err(failure) if switches_line_search(&problem, step, &failure, extra) => {
+                // Retried at the same size, with the line search from now on.
+                extra.restore();
+                line_search = true;
+                carried.summary.line_search_switches += 1;
+                attempts.push((t_new, format!("{failure}; {LINE_SEARCH_SWITCH}")));
             }
             Err(failure) => {
                 carried.summary.cutbacks += 1;
@@ -479,10 +503,27 @@ fn failure_hint(failure: &Failure, extra: &dyn ExtraTerms, dm: &DofMap) -> Strin
     }
 }
 
+/// Whether `line_search = "auto"` switches the line search on after `failure`: an inverted element,
+/// in a step where it applies (the residual is an energy gradient) and is still off.
+fn switches_line_search(
+    problem: &IncrementProblem<'_>,
+    step: &Step,
+    failure: &Failure,
+    extra: &dyn ExtraTerms,
+) -> bool {
+    step.line_search == LineSearchMode::Auto
+        && !problem.line_search
+        && matches!(failure, Failure::Inverted(_))
+        && structure(extra, problem.follower) == Structure::SymmetricDefinite
+}
+
 /// [`LINE_SEARCH_HINT`] for a step that fails on an inverted element where the line search
 /// would apply (`searchable`: the residual is an energy gradient) and is off.
 fn line_search_hint(failure: &Failure, step: &Step, searchable: bool) -> &'static str {
-    if matches!(failure, Failure::Inverted(_)) && searchable && !step.line_search {
+    if matches!(failure, Failure::Inverted(_))
+        && searchable
+        && step.line_search == LineSearchMode::Off
+    {
         LINE_SEARCH_HINT
     } else {
         ""

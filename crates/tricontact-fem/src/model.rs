@@ -291,7 +291,55 @@ pub struct StepDef {
     pub extrapolation: Extrapolation,
     /// Line search along each Newton correction (where the residual is an energy gradient).
     #[serde(default)]
-    pub line_search: bool,
+    pub line_search: LineSearchMode,
+}
+
+/// When a step's Newton corrections are line-searched (`[[step]] line_search`: `true`, `false`
+/// or `"auto"`). The line search applies only where the residual is an energy gradient (no
+/// multipliers, no follower pressure).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LineSearchMode {
+    /// Never (`false`).
+    Off,
+    /// Every correction after the predictor (`true`).
+    On,
+    /// Off until an attempt inverts an element where the line search applies; that increment is
+    /// then retried at the same size with the line search, which stays on for the rest of the
+    /// step (`"auto"`, the default).
+    #[default]
+    Auto,
+}
+
+impl<'de> Deserialize<'de> for LineSearchMode {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = LineSearchMode;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("true, false or \"auto\"")
+            }
+            fn visit_bool<E: serde::de::Error>(
+                self,
+                v: bool,
+            ) -> std::result::Result<Self::Value, E> {
+                Ok(if v {
+                    LineSearchMode::On
+                } else {
+                    LineSearchMode::Off
+                })
+            }
+            fn visit_str<E: serde::de::Error>(
+                self,
+                v: &str,
+            ) -> std::result::Result<Self::Value, E> {
+                match v {
+                    "auto" => Ok(LineSearchMode::Auto),
+                    _ => Err(E::invalid_value(serde::de::Unexpected::Str(v), &self)),
+                }
+            }
+        }
+        d.deserialize_any(Visitor)
+    }
 }
 
 /// Where Newton starts an increment (`[[step]] extrapolation`).
@@ -604,6 +652,35 @@ nlgeom = true
             msg.contains("base64") && msg.contains("ascii") && msg.contains("line"),
             "{msg}"
         );
+    }
+
+    #[test]
+    fn line_search_is_true_false_or_auto() {
+        let with = |v: &str| {
+            GOOD.replace(
+                "nlgeom = true",
+                &format!("nlgeom = true\nline_search = {v}"),
+            )
+        };
+        let mode = |v: &str| {
+            Model::parse(&with(v), Path::new("m.toml"))
+                .expect("valid")
+                .steps[0]
+                .line_search
+        };
+        assert_eq!(mode("true"), LineSearchMode::On);
+        assert_eq!(mode("false"), LineSearchMode::Off);
+        assert_eq!(mode("\"auto\""), LineSearchMode::Auto);
+        let default = Model::parse(GOOD, Path::new("m.toml")).expect("valid");
+        assert_eq!(default.steps[0].line_search, LineSearchMode::Auto);
+        for bad in ["\"always\"", "1"] {
+            let e = Model::parse(&with(bad), Path::new("m.toml")).expect_err("bad value");
+            let msg = e.to_string();
+            assert!(
+                msg.contains("true, false or \"auto\"") && msg.contains("line 24"),
+                "{msg}"
+            );
+        }
     }
 
     #[test]

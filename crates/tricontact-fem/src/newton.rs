@@ -34,9 +34,10 @@
 //! (rows and columns of the extra unknowns times `κ`), so that its blocks share one scale. Norms
 //! are computed without overflow or underflow of the squares.
 //!
-//! With `[[step]] line_search = true`, each correction after the predictor of a potential problem
-//! (no multipliers, no follower pressure) may be shortened by [`crate::line_search`] before the
-//! next iteration.
+//! With the line search on ([`IncrementProblem::line_search`]: `[[step]] line_search = true`, or
+//! `"auto"` once an element inverted, see [`crate::driver`]), each correction after the predictor
+//! of a potential problem (no multipliers, no follower pressure) may be shortened by
+//! [`crate::line_search`] before the next iteration.
 //!
 //! Failure (triggers a cutback in [`crate::driver`]): no convergence within
 //! `max_iterations`, a non-finite or exploding residual (> 1e6 `r_ref`), an
@@ -178,6 +179,8 @@ pub struct IncrementProblem<'a> {
     pub follower: &'a [(usize, f64)],
     /// The force scale of the step so far, `q̄` (see the module documentation; zero for none).
     pub force_scale: f64,
+    /// Line search along the corrections, where the residual is an energy gradient.
+    pub line_search: bool,
 }
 
 /// The structure of an increment's tangent: unsymmetric with follower pressure or unsymmetric
@@ -214,7 +217,7 @@ pub fn solve_increment(
     );
     let mut it = Iterate::new(start, fext_norm.max(SCALE_FRACTION * p.force_scale));
     // Line search where the residual is an energy gradient: the correction being applied.
-    let searching = p.step.line_search && structure == Structure::SymmetricDefinite;
+    let searching = p.line_search && structure == Structure::SymmetricDefinite;
     // Small strain without extra or follower terms: the tangent is constant,
     // so the prescribed values are applied directly (the residual then
     // contains `K_fp Δu_p` exactly) and one factorization serves the step.

@@ -6,8 +6,9 @@ mod common;
 
 use tricontact_fem::analysis::Analysis;
 use tricontact_fem::contact::ContactTerms;
+use tricontact_fem::driver::LINE_SEARCH_SWITCH;
 use tricontact_fem::mesh::{ElementKind, Mesh};
-use tricontact_fem::model::Model;
+use tricontact_fem::model::{LineSearchMode, Model};
 use tricontact_fem::structured::box_mesh;
 
 const MAT: &str = r#"
@@ -860,10 +861,9 @@ fn pressed_block(depth: &str, method: &str) -> Analysis {
 }
 
 /// A step that fails on an inverted element suggests the line search where it would apply and is
-/// off: `contact-block` pressed 30 % with a penalty fails at the slide's first increment (the
-/// same run with `line_search = true` finishes: 33 increments, 235 iterations, 14 cutbacks).
-/// Pressed 40 % with multipliers it fails on an inverted element too, but the line search does
-/// not apply there, and the message does not mention it.
+/// off: `contact-block` pressed 30 % with a penalty and `line_search = false` fails at the
+/// slide's first increment. Pressed 40 % with multipliers it fails on an inverted element too,
+/// but the line search does not apply there, and the message does not mention it.
 #[test]
 fn a_failure_on_an_inverted_element_suggests_the_line_search_where_it_applies() {
     let fail = |an: &Analysis| {
@@ -872,8 +872,12 @@ fn a_failure_on_an_inverted_element_suggests_the_line_search_where_it_applies() 
             .expect_err("the run fails")
             .to_string()
     };
-    let hint = "line_search = true in this [[step]] may get through";
-    let penalty = fail(&pressed_block("0.15", "penalty"));
+    let hint = "line_search = true (or \"auto\", the default) in this [[step]] may get through";
+    let mut an = pressed_block("0.15", "penalty");
+    for step in &mut an.steps {
+        step.line_search = LineSearchMode::Off;
+    }
+    let penalty = fail(&an);
     assert!(
         penalty.contains("inverted (det F ≤ 0); ") && penalty.contains(hint),
         "{penalty}"
@@ -882,6 +886,53 @@ fn a_failure_on_an_inverted_element_suggests_the_line_search_where_it_applies() 
     assert!(
         multiplier.contains("inverted (det F ≤ 0)") && !multiplier.contains("line_search"),
         "{multiplier}"
+    );
+}
+
+/// With `line_search = "auto"` (the default) the same 30 % press finishes: the slide's first
+/// attempt inverts an element, the line search comes on for the rest of that step (and only that
+/// step), and the increment is retried at the same size, not cut back.
+#[test]
+fn an_inverted_element_switches_the_automatic_line_search_on() {
+    let run = |mode: LineSearchMode| {
+        let mut an = pressed_block("0.15", "penalty");
+        assert_eq!(an.steps[1].line_search, LineSearchMode::Auto, "the default");
+        for step in &mut an.steps {
+            step.line_search = mode;
+        }
+        let mut terms = ContactTerms::new(&an);
+        let mut attempts = Vec::new();
+        let summary = tricontact_fem::driver::run(&an, &mut terms, &mut |info| {
+            for (t, why) in info.attempts {
+                attempts.push((info.step, *t, why.clone()));
+            }
+            Ok(())
+        })
+        .expect("the run finishes");
+        (summary, attempts)
+    };
+    let (auto, attempts) = run(LineSearchMode::Auto);
+    assert_eq!(auto.line_search_switches, 1);
+    let switched: Vec<_> = attempts
+        .iter()
+        .filter(|(_, _, why)| why.ends_with(LINE_SEARCH_SWITCH))
+        .collect();
+    assert_eq!(switched.len(), 1, "{attempts:?}");
+    let (step, t, why) = switched[0];
+    assert_eq!(
+        (*step, *t),
+        (1, 0.125),
+        "the slide's first increment: {why}"
+    );
+    assert!(
+        why.starts_with("element ") && why.contains("inverted"),
+        "{why}"
+    );
+    // Not counted as a cutback: one attempt fewer than the attempts listed.
+    assert_eq!(auto.cutbacks, attempts.len() - 1);
+    println!(
+        "30 % press, penalty, automatic line search: {} increments, {} iterations, {} cutbacks",
+        auto.increments, auto.iterations, auto.cutbacks
     );
 }
 

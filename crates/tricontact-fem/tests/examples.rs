@@ -15,7 +15,7 @@ mod common;
 
 use common::{column, contact_history, example, last_column, run_example};
 use tricontact_fem::driver::RunSummary;
-use tricontact_fem::model::Extrapolation;
+use tricontact_fem::model::{Extrapolation, LineSearchMode};
 
 const PAIR: &str = "upper_zmin-lower_zmax";
 
@@ -192,10 +192,11 @@ fn a_singular_multiplier_system_names_its_cause_and_nodes() {
 /// With a penalty, the sliding block's leading-edge nodes are driven deep into the base by
 /// corrections taken while they were open, and elements invert: without a line search the run
 /// needs cutbacks (11 when this test was written); with one it needs none, fewer iterations, and
-/// ends at the same normal force.
+/// ends at the same normal force. With `line_search = "auto"` (the default) the first inverted
+/// element switches it on, and the run needs no cutback either.
 #[test]
 fn a_line_search_spares_penalty_sliding_its_cutbacks() {
-    let run = |line_search: bool| {
+    let run = |line_search: LineSearchMode| {
         let (_, mut an) = example("sliding", "model.toml", None);
         an.contacts[0].method = tricontact_fem::model::ContactMethod::Penalty;
         for step in &mut an.steps {
@@ -206,19 +207,30 @@ fn a_line_search_spares_penalty_sliding_its_cutbacks() {
         let (_, last) = rows.last().expect("increments");
         (summary, column(last, &format!("{pair}_normal_force")))
     };
-    let (plain, f_plain) = run(false);
-    let (searched, f_searched) = run(true);
+    let (plain, f_plain) = run(LineSearchMode::Off);
+    let (searched, f_searched) = run(LineSearchMode::On);
+    let (auto, f_auto) = run(LineSearchMode::Auto);
     println!(
-        "penalty sliding: {} iterations, {} cutbacks without a line search; {} and {} with",
-        plain.iterations, plain.cutbacks, searched.iterations, searched.cutbacks
+        "penalty sliding: {} iterations, {} cutbacks without a line search; {} and {} with; \
+         {} and {} automatic",
+        plain.iterations,
+        plain.cutbacks,
+        searched.iterations,
+        searched.cutbacks,
+        auto.iterations,
+        auto.cutbacks
     );
     assert!(plain.cutbacks > 0, "the case no longer needs a line search");
     assert_eq!(searched.cutbacks, 0);
     assert!(searched.iterations < plain.iterations);
-    assert!(
-        (f_searched - f_plain).abs() < 1e-4 * f_plain,
-        "normal force {f_plain} against {f_searched}"
-    );
+    assert_eq!((auto.cutbacks, auto.line_search_switches), (0, 1));
+    assert!(auto.iterations < plain.iterations);
+    for f in [f_searched, f_auto] {
+        assert!(
+            (f - f_plain).abs() < 1e-4 * f_plain,
+            "normal force {f_plain} against {f}"
+        );
+    }
 }
 
 /// `contact-block` from its model text with the mesh scaled by `scale` and moved by `shift`
@@ -364,7 +376,7 @@ fn an_unreachable_augmented_tolerance_is_named() {
 fn an_ignored_line_search_is_noted() {
     let (_, mut an) = example("contact-block", "model.toml", None);
     assert!(an.notes().is_empty());
-    an.steps[1].line_search = true;
+    an.steps[1].line_search = LineSearchMode::On;
     let notes = an.notes();
     assert_eq!(notes.len(), 1, "{notes:?}");
     assert!(

@@ -21,7 +21,7 @@ use crate::contact::ContactPair;
 use crate::error::{FemError, Result};
 use crate::material::Material;
 use crate::mesh::{ElementKind, Mesh};
-use crate::model::{Extrapolation, Model, OutputDef};
+use crate::model::{Extrapolation, LineSearchMode, Model, OutputDef};
 use crate::shape::QPoint;
 
 /// A volume element taking part in the analysis.
@@ -79,8 +79,8 @@ pub struct Step {
     pub max_cutbacks: usize,
     /// Newton's starting point of an increment.
     pub extrapolation: Extrapolation,
-    /// Line search along Newton corrections ([`crate::newton`]).
-    pub line_search: bool,
+    /// When Newton's corrections are line-searched ([`crate::newton`], [`crate::driver`]).
+    pub line_search: LineSearchMode,
 }
 
 /// Everything the solver needs, resolved to indices.
@@ -219,7 +219,7 @@ impl Analysis {
             .steps
             .iter()
             .enumerate()
-            .filter(|(_, st)| st.line_search)
+            .filter(|(_, st)| st.line_search == LineSearchMode::On)
         {
             let followers: Vec<&str> = self
                 .loads
