@@ -243,7 +243,7 @@ fn adjacency<'a>(n_nodes: usize, elements: impl Iterator<Item = &'a [usize]>) ->
 /// nodes `a` (rows) and `b` (columns) starts at the same place in each of `b`'s columns, relative
 /// to the column's start: one offset per pair of the element's nodes, found once here, places
 /// all of its entries. The merge then reads them instead of searching the columns: on the fine
-/// Hertz example, that search was half of the merge's time (see [`scatter_parallel`]).
+/// Hertz example, that search was half of the merge's time (see `scatter_parallel`).
 #[derive(Clone, Debug)]
 pub struct Pattern {
     /// Symbolic structure (sorted row indices).

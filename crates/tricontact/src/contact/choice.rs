@@ -49,7 +49,7 @@ const MARGIN: f64 = 1e-7;
 /// the closest point; within the projection tolerance, the foot lies outside by at most
 /// `6·10⁻⁹` of the facet's size). So when the best facet among those within a reach `ρ` has
 /// `|P| ≤ ρ − μ`, every facet beyond `ρ` has `|P_f| > ρ − μ/2` and can neither beat nor tie it:
-/// the answer is that of all facets within `radius`. The margin `μ` is [`MARGIN`] times the
+/// the answer is that of all facets within `radius`. The margin `μ` is `MARGIN` (10⁻⁷) times the
 /// extent of the surface plus the magnitudes of the coordinates of the node and of its closest
 /// point on the surface, far above the tolerance's offset and the rounding of `P` and `d_f`. The reach starts at the distance to the closest facet
 /// (plus `2μ`) and grows, by at least an eighth of `radius`, until that holds or it is `radius`.
