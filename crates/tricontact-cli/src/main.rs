@@ -13,6 +13,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use tricontact_fem::analysis::Analysis;
+use tricontact_fem::assembly::ExtraTerms;
 use tricontact_fem::contact::ContactTerms;
 use tricontact_fem::driver::{self, IncrementInfo};
 use tricontact_fem::error::load_factor_text;
@@ -326,6 +327,7 @@ fn run(
         }
     }
     let mut contact = ContactTerms::new(&an);
+    writer.extra_columns(contact.history().iter().map(|(name, _)| name.as_str()));
     // (step, load factor) of the last converged increment, for the verbose log.
     let mut last = (usize::MAX, 0.0);
     let summary = driver::run(&an, &mut contact, &mut |info| {

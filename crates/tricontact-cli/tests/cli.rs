@@ -496,6 +496,42 @@ fn penalty_sliding(name: &str, line_search: &str) -> String {
     stdout
 }
 
+/// A contact run whose first increment fails writes `history.csv` with its whole header (the
+/// contact pair's columns too) and no row.
+#[test]
+fn a_failed_first_increment_leaves_the_whole_history_header() {
+    let out = temp_dir("first-fails");
+    let ex = examples_dir().join("patch");
+    let text = std::fs::read_to_string(ex.join("penalty.toml"))
+        .expect("model")
+        .replace(
+            "file = \"matching-hex.msh\"",
+            &format!(
+                "file = {:?}",
+                ex.join("matching-hex.msh").to_str().expect("utf8")
+            ),
+        )
+        .replace("plots = true", "plots = false")
+        .replace("[[step]]", "[[step]]\nmax_iterations = 1\nmax_cutbacks = 0");
+    let model = out.join("first.toml");
+    std::fs::write(&model, text).expect("write");
+    let o = bin()
+        .args(["run".as_ref(), model.as_os_str(), "--output".as_ref()])
+        .arg(out.join("results"))
+        .output()
+        .expect("runs");
+    assert_eq!(o.status.code(), Some(1));
+    let history = std::fs::read_to_string(out.join("results/history.csv")).expect("history");
+    assert_eq!(history.lines().count(), 1, "{history}");
+    let header = history.trim_end();
+    assert!(
+        header.starts_with("step,step_name,increment,")
+            && header.ends_with("upper_zmin-lower_zmax_max_pressure"),
+        "{header}"
+    );
+    std::fs::remove_dir_all(&out).ok();
+}
+
 #[test]
 fn verbose_log_names_each_cut_back_attempt() {
     // The sliding example with a penalty and no line search needs cutbacks (VERIFICATION.md):

@@ -17,7 +17,9 @@
 //! * extra point fields of the extra terms (contact) in every `.vtu`.
 //!
 //! When a run fails, [`ResultWriter::finish`] writes the last converged increment's `.vtu` if
-//! `output.every` had skipped it, so that the state the run reached can be opened.
+//! `output.every` had skipped it, so that the state the run reached can be opened, and
+//! `history.csv` even when no increment converged (its header alone; the extra terms' columns
+//! are in it when [`ResultWriter::extra_columns`] named them).
 //!
 //! Files of an earlier run that this run would write under the same names
 //! (`<stem>.pvd`, `<stem>_<step>_<increment>.vtu`, `history.csv` and the
@@ -245,6 +247,11 @@ impl ResultWriter {
     /// # Errors
     /// I/O errors.
     pub fn finish(&mut self, an: &Analysis) -> Result<()> {
+        if an.output.history && !self.written.contains(&self.dir.join(HISTORY_CSV)) {
+            // No increment converged: the header alone, so that the table is there to read.
+            self.close_header();
+            self.history_pending = true;
+        }
         if self.history_pending {
             self.write_history()?;
         }
@@ -252,6 +259,27 @@ impl ResultWriter {
             self.write_vtu(an, &last.state())?;
         }
         Ok(())
+    }
+
+    /// Completes the `history.csv` header with the extra terms' columns (the names of
+    /// [`IncrementInfo::history`], e.g. from [`crate::assembly::ExtraTerms::history`] before the
+    /// run), so that a run whose first increment fails still writes the whole header. Without
+    /// it, the first converged increment completes the header. Does nothing once it is complete.
+    pub fn extra_columns<'a>(&mut self, names: impl IntoIterator<Item = &'a str>) {
+        if self.header_done {
+            return;
+        }
+        for name in names {
+            let _ = write!(self.history, ",{}", csv_field(name));
+        }
+        self.close_header();
+    }
+
+    fn close_header(&mut self) {
+        if !self.header_done {
+            self.history.push('\n');
+            self.header_done = true;
+        }
     }
 
     fn write_history(&mut self) -> Result<()> {
@@ -272,12 +300,8 @@ impl ResultWriter {
     /// I/O errors.
     pub fn write(&mut self, an: &Analysis, info: &IncrementInfo<'_>) -> Result<()> {
         if !self.header_done {
-            // Extra columns (contact) are known from the first increment on.
-            for (name, _) in info.history {
-                let _ = write!(self.history, ",{}", csv_field(name));
-            }
-            self.history.push('\n');
-            self.header_done = true;
+            // Extra columns (contact) not named by `extra_columns`: from the first increment.
+            self.extra_columns(info.history.iter().map(|(name, _)| name.as_str()));
         }
         let last = info.residuals.last().copied().unwrap_or(0.0);
         let _ = write!(

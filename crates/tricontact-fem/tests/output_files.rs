@@ -117,6 +117,22 @@ fn failed_run_leaves_only_its_own_files() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A run whose first increment fails still writes `history.csv`: its header, no row.
+#[test]
+fn a_run_failing_at_its_first_increment_writes_the_history_header() {
+    let an = analysis(&model());
+    let dir = fresh_dir("first-fails");
+    run_into(&an, &dir, Some(1)).expect_err("the run fails");
+    assert_eq!(names(&dir), ["history.csv", "newton.csv"]);
+    let history = std::fs::read_to_string(dir.join("history.csv")).expect("history");
+    assert_eq!(history.lines().count(), 1, "{history}");
+    assert!(
+        history.starts_with("step,step_name,increment,"),
+        "{history}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn run_without_history_or_vtu_removes_the_earlier_ones() {
     let an = analysis(&model());
