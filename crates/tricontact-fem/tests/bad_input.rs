@@ -539,6 +539,47 @@ fn empty_repeated_and_misplaced_group_contents_are_named() {
     );
 }
 
+/// A load on a triangle that no body element has as a face: a pressure names the face, a force
+/// the nodes of no body; `follower` on a force is named too.
+#[test]
+fn loads_off_every_body_and_a_follower_force_are_named() {
+    let mut mesh = msh(4, &TET)
+        .replace("$Nodes\n1 4 1 4\n3 1 0 4\n", "$Nodes\n1 7 1 7\n3 1 0 7\n")
+        .replace("4\n0 0 0\n", "4\n5\n6\n7\n0 0 0\n")
+        .replace(
+            "$Elements\n1 1 1 1\n3 1 4 1\n1 1 2 3 4\n",
+            "$Elements\n2 2 1 2\n3 1 4 1\n1 1 2 3 4\n2 1 2 1\n2 5 6 7\n",
+        );
+    mesh = mesh.replace("0 0 1\n$EndNodes", "0 0 1\n5 0 0\n6 0 0\n5 1 0\n$EndNodes");
+    assert!(
+        mesh.contains("2 5 6 7") && mesh.contains("5 1 0\n$EndNodes"),
+        "{mesh}"
+    );
+    let fixed = "[[boundary]]\ngroup = \"solid\"\nfix = [\"x\", \"y\", \"z\"]\n";
+    for (name, load, expected) in [
+        (
+            "off-pressure",
+            "pressure = 1.0",
+            "load 'base': face 2 is not on the surface of a body",
+        ),
+        (
+            "off-force",
+            "force = [0.0, 0.0, 1.0]",
+            "load 'base': applied to nodes of no body",
+        ),
+        (
+            "follower-force",
+            "force = [0.0, 0.0, 1.0]\nfollower = true",
+            "load 'base': `follower` applies to a pressure only",
+        ),
+    ] {
+        let extra = format!("{fixed}[[load]]\ngroup = \"base\"\n{load}\n");
+        let p = setup(name, &mesh, &model_text("solid", &extra));
+        let msg = load_analysis(&p).expect_err(name).to_string();
+        assert!(msg.contains(expected), "{msg}");
+    }
+}
+
 /// A displacement is a table of components; an array (whose fourth value was ignored) is refused
 /// with the line of the key.
 #[test]

@@ -2,10 +2,12 @@
 //! nodes or faces, a pressure over the outward faces of a surface group, see [`crate::loads`]),
 //! with the steps it acts in.
 
+use std::collections::HashMap;
+
 use super::{BodyElement, Load, Step, invalid, steps, unknown};
 use crate::error::FemError;
 use crate::loads;
-use crate::mesh::Mesh;
+use crate::mesh::{Element, Group, Mesh};
 use crate::model::Model;
 
 /// The model's loads (one whose group, values or faces cannot be used is left out; its problem
@@ -20,147 +22,156 @@ pub(super) fn resolve(
     nodes_known: bool,
     problems: &mut Vec<FemError>,
 ) -> Vec<Load> {
-    let src = &model.source;
-    let body_refs: Vec<&crate::mesh::Element> =
-        body.iter().map(|b| &mesh.elements[b.element]).collect();
-    let node_elems = loads::node_to_elements(mesh.nodes.len(), &body_refs);
-    let mut load_list = Vec::new();
-    for (li, l) in model.loads.iter().enumerate() {
-        let at = |key: &str| src.at("load", li, key);
-        let active = steps::mask(
-            steps,
-            l.steps.as_deref(),
-            &format!("{}load '{}'", at("steps"), l.group),
-            problems,
-        );
-        let g = match mesh.lookup(&l.group, l.pressure.is_some().then_some(2)) {
-            Ok(Some(g)) => g,
-            Ok(None) => {
-                let kind = if l.pressure.is_some() {
-                    "surface"
-                } else {
-                    "node"
-                };
-                problems.push(unknown(at("group"), kind, &l.group, mesh));
-                continue;
-            }
-            Err(m) => {
-                problems.push(invalid(format!("{}load: {m}", at("group"))));
-                continue;
-            }
-        };
-        if l.force.is_some() == l.pressure.is_some() {
-            problems.push(invalid(format!(
-                "{}load '{}': give exactly one of `force` or `pressure`",
-                at(""),
-                l.group
-            )));
-            continue;
+    let body_refs: Vec<&Element> = body.iter().map(|b| &mesh.elements[b.element]).collect();
+    let bodies = Bodies {
+        mesh,
+        node_elems: loads::node_to_elements(mesh.nodes.len(), &body_refs),
+        elements: body_refs,
+        active_nodes,
+        nodes_known,
+    };
+    (0..model.loads.len())
+        .filter_map(|li| resolve_one(model, li, steps, &bodies, problems))
+        .collect()
+}
+
+/// What a load is resolved against: the mesh, the body elements (and those around each node),
+/// the nodes of bodies and rigid masters, and whether those are known (see [`resolve`]).
+struct Bodies<'a> {
+    mesh: &'a Mesh,
+    elements: Vec<&'a Element>,
+    node_elems: Vec<Vec<usize>>,
+    active_nodes: &'a [bool],
+    nodes_known: bool,
+}
+
+/// `[[load]]` number `li` of `model`, or `None` with its problems added to `problems`.
+fn resolve_one(
+    model: &Model,
+    li: usize,
+    steps: &[Step],
+    bodies: &Bodies<'_>,
+    problems: &mut Vec<FemError>,
+) -> Option<Load> {
+    let l = &model.loads[li];
+    let at = |key: &str| model.source.at("load", li, key);
+    // A problem of this load with the model key `key`.
+    let problem =
+        |key: &str, what: String| invalid(format!("{}load '{}': {what}", at(key), l.group));
+    let active = steps::mask(
+        steps,
+        l.steps.as_deref(),
+        &format!("{}load '{}'", at("steps"), l.group),
+        problems,
+    );
+    let mesh = bodies.mesh;
+    let g = match mesh.lookup(&l.group, l.pressure.is_some().then_some(2)) {
+        Ok(Some(g)) => g,
+        Ok(None) => {
+            let kind = if l.pressure.is_some() {
+                "surface"
+            } else {
+                "node"
+            };
+            problems.push(unknown(at("group"), kind, &l.group, mesh));
+            return None;
         }
-        let force_finite = l.force.is_none_or(|f| f.iter().all(|c| c.is_finite()));
-        if !force_finite || !l.pressure.is_none_or(f64::is_finite) {
-            let key = if force_finite { "pressure" } else { "force" };
-            problems.push(invalid(format!(
-                "{}load '{}': non-finite {key}",
-                at(key),
-                l.group
-            )));
-            continue;
+        Err(m) => {
+            problems.push(invalid(format!("{}load: {m}", at("group"))));
+            return None;
         }
-        let mut follower = None;
-        if l.follower && l.pressure.is_none() {
-            problems.push(invalid(format!(
-                "{}load '{}': `follower` applies to a pressure only",
-                at("follower"),
-                l.group
-            )));
-        }
-        let forces = match (l.force, l.pressure) {
-            (Some(f), None) => {
-                let faces: Vec<usize> = if g.dim == 2 {
-                    g.elements.clone()
-                } else {
-                    Vec::new()
-                };
-                let nodes: Vec<usize> = g
-                    .nodes
-                    .iter()
-                    .copied()
-                    .filter(|&a| active_nodes[a])
-                    .collect();
-                if faces.is_empty() && nodes.is_empty() && nodes_known {
-                    problems.push(invalid(format!(
-                        "{}load '{}': the group has no node of any body",
-                        at("group"),
-                        l.group
-                    )));
-                }
-                loads::total_force(mesh, &faces, &nodes, f)
-            }
-            (None, Some(p)) => {
-                if g.dim != 2 {
-                    problems.push(invalid(format!(
-                        "{}load '{}': pressure needs a surface (2D) group, '{}' has dimension {}",
-                        at("group"),
-                        l.group,
-                        g.name,
-                        g.dim
-                    )));
-                    continue;
-                }
-                if g.elements.is_empty() {
-                    problems.push(invalid(format!(
-                        "{}load '{}': the surface group has no faces",
-                        at("group"),
-                        l.group
-                    )));
-                    continue;
-                }
-                if let Some((a, b)) = loads::repeated_face(mesh, &g.elements) {
-                    problems.push(invalid(format!(
-                        "{}load '{}': elements {a} and {b} (Gmsh tags) are the same face: its pressure would count twice",
-                        at("group"),
-                        l.group
-                    )));
-                    continue;
-                }
-                match loads::outward_faces(mesh, &g.elements, &body_refs, &node_elems) {
-                    Ok(faces) => {
-                        let f = loads::pressure_forces(mesh, &faces, p);
-                        if l.follower {
-                            follower = Some((p, faces));
-                        }
-                        f
-                    }
-                    Err(tag) => {
-                        if nodes_known {
-                            problems.push(invalid(format!(
-                                "{}load '{}': face {tag} is not on the surface of a body",
-                                at("group"),
-                                l.group
-                            )));
-                        }
-                        continue;
-                    }
-                }
-            }
-            _ => unreachable!("exactly one of force and pressure, checked above"),
-        };
-        if forces.keys().any(|&a| !active_nodes[a]) && nodes_known {
-            problems.push(invalid(format!(
-                "{}load '{}': applied to nodes of no body",
-                at("group"),
-                l.group
-            )));
-        }
-        let mut forces: Vec<(usize, [f64; 3])> = forces.into_iter().collect();
-        forces.sort_by_key(|(a, _)| *a);
-        load_list.push(Load {
-            name: l.group.clone(),
-            forces,
-            follower,
-            active,
-        });
+    };
+    let force_finite = l.force.is_none_or(|f| f.iter().all(|c| c.is_finite()));
+    let unusable = if l.force.is_some() == l.pressure.is_some() {
+        Some(("", "give exactly one of `force` or `pressure`".to_string()))
+    } else if !force_finite || !l.pressure.is_none_or(f64::is_finite) {
+        let key = if force_finite { "pressure" } else { "force" };
+        Some((key, format!("non-finite {key}")))
+    } else {
+        None
+    };
+    if let Some((key, what)) = unusable {
+        problems.push(problem(key, what));
+        return None;
     }
-    load_list
+    if l.follower && l.pressure.is_none() {
+        problems.push(problem(
+            "follower",
+            "`follower` applies to a pressure only".into(),
+        ));
+    }
+    let (forces, follower) = match (l.force, l.pressure) {
+        (Some(f), _) => {
+            let forces = group_force(g, f, bodies);
+            if forces.is_none() {
+                problems.push(problem("group", "the group has no node of any body".into()));
+            }
+            (forces?, None)
+        }
+        (None, p) => {
+            let p = p?;
+            let faces = pressure_faces(g, bodies)
+                .map_err(|what| problems.extend(what.map(|w| problem("group", w))))
+                .ok()?;
+            let forces = loads::pressure_forces(mesh, &faces, p);
+            (forces, l.follower.then_some((p, faces)))
+        }
+    };
+    if forces.keys().any(|&a| !bodies.active_nodes[a]) && bodies.nodes_known {
+        problems.push(problem("group", "applied to nodes of no body".into()));
+    }
+    let mut forces: Vec<(usize, [f64; 3])> = forces.into_iter().collect();
+    forces.sort_by_key(|(a, _)| *a);
+    Some(Load {
+        name: l.group.clone(),
+        forces,
+        follower,
+        active,
+    })
+}
+
+/// The nodal forces of the total force `f` spread over group `g` (its faces if it is a surface
+/// group, else its nodes of bodies); `None` when it has neither and the nodes are known.
+fn group_force(g: &Group, f: [f64; 3], bodies: &Bodies<'_>) -> Option<HashMap<usize, [f64; 3]>> {
+    let faces: Vec<usize> = if g.dim == 2 {
+        g.elements.clone()
+    } else {
+        Vec::new()
+    };
+    let nodes: Vec<usize> = g
+        .nodes
+        .iter()
+        .copied()
+        .filter(|&a| bodies.active_nodes[a])
+        .collect();
+    if faces.is_empty() && nodes.is_empty() && bodies.nodes_known {
+        return None;
+    }
+    Some(loads::total_force(bodies.mesh, &faces, &nodes, f))
+}
+
+/// The faces of the surface group `g` a pressure acts on, each with its outward sign; `Err` with
+/// the problem (`None` where it is not one yet: a face on no known body before the bodies are
+/// resolved).
+fn pressure_faces(g: &Group, bodies: &Bodies<'_>) -> Result<Vec<(usize, f64)>, Option<String>> {
+    let mesh = bodies.mesh;
+    if g.dim != 2 {
+        return Err(Some(format!(
+            "pressure needs a surface (2D) group, '{}' has dimension {}",
+            g.name, g.dim
+        )));
+    }
+    if g.elements.is_empty() {
+        return Err(Some("the surface group has no faces".into()));
+    }
+    if let Some((a, b)) = loads::repeated_face(mesh, &g.elements) {
+        return Err(Some(format!(
+            "elements {a} and {b} (Gmsh tags) are the same face: its pressure would count twice"
+        )));
+    }
+    loads::outward_faces(mesh, &g.elements, &bodies.elements, &bodies.node_elems).map_err(|tag| {
+        bodies
+            .nodes_known
+            .then(|| format!("face {tag} is not on the surface of a body"))
+    })
 }
