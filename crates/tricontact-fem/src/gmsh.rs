@@ -227,6 +227,7 @@ fn parse_error_message(
 
 /// The parsed file's type.
 type MshFile = mshio::MshFile<u64, i32, f64>;
+type ElementBlock = mshio::mshfile::ElementBlock<u64, i32>;
 
 /// The physical tags of each entity `(dim, tag)`.
 fn physical_tags_of_entities(msh: &MshFile) -> HashMap<(i32, i32), Vec<i32>> {
@@ -352,29 +353,10 @@ fn read_elements(
             .get(&(dim, block.entity_tag))
             .cloned()
             .unwrap_or_default();
-        if phys.is_empty() {
+        let Some(&first) = phys.first() else {
             continue;
-        }
-        let kind = kind_of(block.element_type);
-        let is_node_only = matches!(
-            block.element_type,
-            ElementType::Pnt | ElementType::Lin2 | ElementType::Lin3
-        ) || dim < 2;
-        if kind.is_none() && !is_node_only {
-            return Err(FemError::UnsupportedElement {
-                path: path.to_path_buf(),
-                kind: format!("{:?}", block.element_type),
-                group: group_name(dim, phys[0]),
-            });
-        }
-        if let Some(k) = kind.filter(|k| usize::try_from(dim).ok() != Some(k.dim())) {
-            return Err(merr(format!(
-                "an element block of the {dim}D entity {} (group '{}') holds {k:?} elements, which are {}D",
-                block.entity_tag,
-                group_name(dim, phys[0]),
-                k.dim()
-            )));
-        }
+        };
+        let kind = block_kind(block, &group_name(dim, first), path)?;
         for el in &block.elements {
             if !element_tags.insert(el.element_tag) {
                 return Err(merr(format!(
@@ -382,41 +364,26 @@ fn read_elements(
                     el.element_tag
                 )));
             }
-            let mut idx = Vec::with_capacity(el.nodes.len());
-            for t in &el.nodes {
-                let i = tag_to_index.get(t).copied().ok_or_else(|| {
-                    merr(format!(
-                        "element {} refers to unknown node {t}",
-                        el.element_tag
-                    ))
-                })?;
-                idx.push(i);
-            }
+            let idx = el
+                .nodes
+                .iter()
+                .map(|t| {
+                    tag_to_index.get(t).copied().ok_or_else(|| {
+                        merr(format!(
+                            "element {} refers to unknown node {t}",
+                            el.element_tag
+                        ))
+                    })
+                })
+                .collect::<Result<Vec<usize>>>()?;
             let element_index = match kind {
-                Some(k) if !is_node_only => {
-                    if idx.len() != k.num_nodes() {
-                        return Err(merr(format!(
-                            "element {} has {} nodes, expected {}",
-                            el.element_tag,
-                            idx.len(),
-                            k.num_nodes()
-                        )));
-                    }
-                    let element = Element {
-                        kind: k,
-                        nodes: idx.clone(),
-                        tag: el.element_tag,
-                    };
-                    if let Some(a) = crate::mesh::repeated_node(&element) {
-                        return Err(merr(format!(
-                            "element {} ({k:?}) names node {} twice",
-                            el.element_tag, mesh.node_tags[a]
-                        )));
-                    }
+                Some(k) => {
+                    let element =
+                        volume_or_face(k, el.element_tag, idx.clone(), mesh).map_err(merr)?;
                     mesh.elements.push(element);
                     Some(mesh.elements.len() - 1)
                 }
-                _ => None,
+                None => None,
             };
             for &p in &phys {
                 let g = groups.entry((dim, p)).or_insert_with(|| Group {
@@ -446,4 +413,66 @@ fn read_elements(
         });
     }
     Ok(groups.into_values().collect())
+}
+
+/// The element kind a block of a physical group (`group`, named for messages) holds: `None` for
+/// points and lines, and for blocks of 0D and 1D entities, which only give their nodes to their
+/// groups.
+///
+/// # Errors
+/// An element type the solver does not support, or one whose dimension is not its entity's (a
+/// volume or face element in a 0D or 1D entity too).
+fn block_kind(block: &ElementBlock, group: &str, path: &Path) -> Result<Option<ElementKind>> {
+    let dim = block.entity_dim;
+    let node_only = matches!(
+        block.element_type,
+        ElementType::Pnt | ElementType::Lin2 | ElementType::Lin3
+    ) || dim < 2;
+    match kind_of(block.element_type) {
+        None if node_only => Ok(None),
+        None => Err(FemError::UnsupportedElement {
+            path: path.to_path_buf(),
+            kind: format!("{:?}", block.element_type),
+            group: group.to_string(),
+        }),
+        Some(k) if usize::try_from(dim).ok() != Some(k.dim()) => Err(FemError::Mesh {
+            path: path.to_path_buf(),
+            message: format!(
+                "an element block of the {dim}D entity {} (group '{group}') holds {k:?} elements, which are {}D",
+                block.entity_tag,
+                k.dim()
+            ),
+        }),
+        // (A kind's dimension is 2 or 3, so a matching entity is not node-only.)
+        Some(k) => Ok((!node_only).then_some(k)),
+    }
+}
+
+/// The element of kind `k` with Gmsh tag `tag` on the node indices `nodes`, checked: as many
+/// nodes as the kind has, none twice (named by their tags in `mesh`).
+fn volume_or_face(
+    k: ElementKind,
+    tag: u64,
+    nodes: Vec<usize>,
+    mesh: &Mesh,
+) -> std::result::Result<Element, String> {
+    if nodes.len() != k.num_nodes() {
+        return Err(format!(
+            "element {tag} has {} nodes, expected {}",
+            nodes.len(),
+            k.num_nodes()
+        ));
+    }
+    let element = Element {
+        kind: k,
+        nodes,
+        tag,
+    };
+    match crate::mesh::repeated_node(&element) {
+        Some(a) => Err(format!(
+            "element {tag} ({k:?}) names node {} twice",
+            mesh.node_tags[a]
+        )),
+        None => Ok(element),
+    }
 }

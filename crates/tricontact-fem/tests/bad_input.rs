@@ -580,6 +580,37 @@ fn loads_off_every_body_and_a_follower_force_are_named() {
     }
 }
 
+/// An element naming a node the `$Nodes` section does not define, and a face element in a curve
+/// (1D) entity of a physical group, are named.
+#[test]
+fn an_unknown_node_and_a_face_in_a_curve_entity_are_named() {
+    let unknown = msh(4, &TET).replace("\n1 1 2 3 4\n", "\n1 1 2 3 99\n");
+    let e = gmsh::parse_msh(unknown.as_bytes(), Path::new("m.msh")).expect_err("unknown node");
+    assert!(
+        e.to_string()
+            .contains("element 1 refers to unknown node 99"),
+        "{e}"
+    );
+    let curve = msh(4, &TET)
+        .replace("$PhysicalNames\n2\n", "$PhysicalNames\n3\n1 3 \"edge\"\n")
+        .replace(
+            "$Entities\n0 0 1 1\n",
+            "$Entities\n0 1 1 1\n1 0 0 0 1 1 0 1 3 0\n",
+        )
+        .replace(
+            "$Elements\n1 1 1 1\n3 1 4 1\n1 1 2 3 4\n",
+            "$Elements\n2 2 1 5\n3 1 4 1\n1 1 2 3 4\n1 1 2 1\n5 1 2 3\n",
+        );
+    assert!(curve.contains("5 1 2 3"), "{curve}");
+    let e = gmsh::parse_msh(curve.as_bytes(), Path::new("m.msh")).expect_err("face in a curve");
+    assert!(
+        e.to_string().contains(
+            "an element block of the 1D entity 1 (group 'edge') holds Tri3 elements, which are 2D"
+        ),
+        "{e}"
+    );
+}
+
 /// A displacement is a table of components; an array (whose fourth value was ignored) is refused
 /// with the line of the key.
 #[test]
