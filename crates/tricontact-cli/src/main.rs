@@ -505,12 +505,13 @@ fn check(model_path: &Path, mesh_override: Option<PathBuf>) -> Result<(), FemErr
         let (mask, _) = driver::step_constraints(&an, s);
         let prescribed = mask.iter().filter(|&&m| m).count();
         say!(
-            "step {} '{}': {} prescribed DOFs, {} free DOFs, nlgeom = {}",
+            "step {} '{}': {} prescribed DOFs, {} free DOFs, nlgeom = {}, line_search = {}",
             s + 1,
             an.steps[s].name,
             prescribed,
             3 * active - prescribed,
-            an.steps[s].nlgeom
+            an.steps[s].nlgeom,
+            an.steps[s].line_search
         );
         if problems.is_empty()
             && an.contacts.is_empty()

@@ -77,6 +77,10 @@ fn check_prints_summary() {
         stdout.contains("567 DOFs") && stdout.contains("540 free DOFs"),
         "{stdout}"
     );
+    assert!(
+        stdout.contains("nlgeom = true, line_search = \"auto\""),
+        "{stdout}"
+    );
     assert!(stdout.contains("no problems found"), "{stdout}");
 }
 

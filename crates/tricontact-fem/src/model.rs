@@ -310,6 +310,17 @@ pub enum LineSearchMode {
     Auto,
 }
 
+/// As written in a model file: `true`, `false` or `"auto"`.
+impl std::fmt::Display for LineSearchMode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Off => "false",
+            Self::On => "true",
+            Self::Auto => "\"auto\"",
+        })
+    }
+}
+
 impl<'de> Deserialize<'de> for LineSearchMode {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
         struct Visitor;
