@@ -17,6 +17,11 @@
 //! of a node is about ten times the stiffness of an element of size `h`, so the penetration under
 //! a contact pressure `p` is about `0.1 h p / E` per node.
 //!
+//! A given `penalty` below [`PENALTY_NOTE_RANGE`]`.0` or above `.1` times that default is
+//! reported (not refused): such a factor most often comes from a modulus or a length in other
+//! units than the mesh's, and gives penetrations that many times the default's, or a tangent
+//! that much worse conditioned.
+//!
 //! # Adjust
 //! With `adjust = d`, every slave node whose initial gap is `−d ≤ P < 0` is moved along `W` onto the
 //! master surface in the reference configuration (no strain). Deeper penetrations are kept and
@@ -388,7 +393,7 @@ pub fn resolve(
         return Err(problems);
     }
     let surface = search_surface(&name, m_facets, &m_tags, mesh, &at("master"))?;
-    let report = initial_penetrations(
+    let mut report = initial_penetrations(
         def,
         &name,
         mesh,
@@ -401,6 +406,7 @@ pub fn resolve(
         (h_mean, h_max),
         at,
     )?;
+    report.extend(penalty_note(def.penalty, def.method, (e, h_mean), &name));
     let mut passes = vec![pass(
         mesh,
         Some(slaves),
@@ -426,6 +432,41 @@ pub fn resolve(
         passes,
         report,
     })
+}
+
+/// The range of a given penalty, as a multiple of the default `10 E h`, outside which it is
+/// reported (see the module documentation).
+pub const PENALTY_NOTE_RANGE: (f64, f64) = (1e-2, 1e4);
+
+/// What to report about a given `penalty` far from the default `10 E h` (`e`, `h`) for a pair
+/// enforced by `method`, if anything.
+fn penalty_note(
+    penalty: Option<f64>,
+    method: ContactMethod,
+    (e, h): (f64, f64),
+    name: &str,
+) -> Option<String> {
+    let (a, default) = (penalty?, 10.0 * e * h);
+    let ratio = a / default;
+    let (low, high) = PENALTY_NOTE_RANGE;
+    if !ratio.is_finite() || ratio == 0.0 || (low..=high).contains(&ratio) {
+        return None;
+    }
+    let effect = match (method, ratio < low) {
+        (ContactMethod::Multiplier, _) => {
+            "which scales the multipliers' equations as far from the rest of the tangent"
+                .to_string()
+        }
+        (_, true) => format!(
+            "which makes penetrations (about p/α under a pressure p) {:.1e} times the default's",
+            1.0 / ratio
+        ),
+        (_, false) => "which makes the tangent about as many times worse conditioned".to_string(),
+    };
+    Some(format!(
+        "contact '{name}': penalty {a:e} is {ratio:.1e} times the default 10 E h = {default:.4e} \
+         (E = {e:.4e}, h = {h:.4e}), {effect}; check its units"
+    ))
 }
 
 /// Young's modulus for the default penalty: that of the element bounded by the first of
@@ -671,4 +712,46 @@ fn initial_penetrations(
         ));
     }
     Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A given penalty is reported only outside `PENALTY_NOTE_RANGE` times `10 E h`, with what it
+    /// does for the pair's method; never the default.
+    #[test]
+    fn a_penalty_far_from_the_default_is_reported() {
+        let (e, h) = (2.0e5, 0.5);
+        let default = 10.0 * e * h;
+        let note = |a: Option<f64>, method| penalty_note(a, method, (e, h), "p");
+        let (low, high) = PENALTY_NOTE_RANGE;
+        for method in [ContactMethod::Penalty, ContactMethod::Augmented] {
+            assert_eq!(note(None, method), None);
+            for a in [low * default, default, high * default] {
+                assert_eq!(note(Some(a), method), None, "{a}");
+            }
+            let soft = note(Some(0.5 * low * default), method).expect("soft");
+            assert!(
+                soft.starts_with(
+                    "contact 'p': penalty 5e3 is 5.0e-3 times the default 10 E h = 1.0000e6"
+                ) && soft.contains("penetrations (about p/α under a pressure p) 2.0e2 times"),
+                "{soft}"
+            );
+            let stiff = note(Some(2.0 * high * default), method).expect("stiff");
+            assert!(
+                stiff.contains("is 2.0e4 times") && stiff.contains("worse conditioned"),
+                "{stiff}"
+            );
+        }
+        let multiplier = note(Some(1e-3 * low * default), ContactMethod::Multiplier).expect("far");
+        assert!(
+            multiplier.contains("multipliers' equations"),
+            "{multiplier}"
+        );
+        assert_eq!(
+            note(Some(f64::MIN_POSITIVE * 1e-10), ContactMethod::Penalty),
+            None
+        );
+    }
 }
