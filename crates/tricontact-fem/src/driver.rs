@@ -428,7 +428,7 @@ fn run_step(
                 attempts.clear();
                 control.converged();
             }
-            Err(failure) if switches_line_search(&problem, step, &failure, extra) => {
+            Err(failure) if switches_line_search(&problem, &failure, extra) => {
                 // Retried at the same size, with the line search from now on.
                 extra.restore();
                 line_search = true;
@@ -480,8 +480,7 @@ fn cut_back(
     if control.failed() {
         return Ok(());
     }
-    let searchable = structure(extra, problem.follower) == Structure::SymmetricDefinite;
-    let search_hint = line_search_hint(&failure, step, searchable);
+    let search_hint = line_search_hint(&failure, step, line_search_applies(problem, extra));
     Err(FemError::NotConverged {
         step: step.name.clone(),
         load_factor: t,
@@ -507,14 +506,19 @@ fn failure_hint(failure: &Failure, extra: &dyn ExtraTerms, dm: &DofMap) -> Strin
 /// in a step where it applies (the residual is an energy gradient) and is still off.
 fn switches_line_search(
     problem: &IncrementProblem<'_>,
-    step: &Step,
     failure: &Failure,
     extra: &dyn ExtraTerms,
 ) -> bool {
-    step.line_search == LineSearchMode::Auto
+    problem.step.line_search == LineSearchMode::Auto
         && !problem.line_search
         && matches!(failure, Failure::Inverted(_))
-        && structure(extra, problem.follower) == Structure::SymmetricDefinite
+        && line_search_applies(problem, extra)
+}
+
+/// Whether the line search applies to `problem`: its residual is an energy gradient (no
+/// multipliers, no follower pressure).
+fn line_search_applies(problem: &IncrementProblem<'_>, extra: &dyn ExtraTerms) -> bool {
+    structure(extra, problem.follower) == Structure::SymmetricDefinite
 }
 
 /// [`LINE_SEARCH_HINT`] for a step that fails on an inverted element where the line search

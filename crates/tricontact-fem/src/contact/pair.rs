@@ -378,7 +378,8 @@ pub fn resolve(
     }
     let e = youngs_modulus(mesh, bodies, &node_elems, &master.elements, &slaves);
     let (h_mean, h_max) = edge_lengths(mesh, &m_facets);
-    let penalty = def.penalty.unwrap_or(10.0 * e * h_mean);
+    let default_penalty = 10.0 * e * h_mean;
+    let penalty = def.penalty.unwrap_or(default_penalty);
     // A valid material has a finite, positive modulus: any other `e` comes from a material that
     // is reported invalid with its own key (`nu = 0.5` gives `E = NaN` here), and the model is
     // rejected for it, so this pair does not report it again.
@@ -406,7 +407,12 @@ pub fn resolve(
         (h_mean, h_max),
         at,
     )?;
-    report.extend(penalty_note(def.penalty, def.method, (e, h_mean), &name));
+    report.extend(penalty_note(
+        def.penalty,
+        def.method,
+        (default_penalty, e, h_mean),
+        &name,
+    ));
     let mut passes = vec![pass(
         mesh,
         Some(slaves),
@@ -438,15 +444,15 @@ pub fn resolve(
 /// reported (see the module documentation).
 pub const PENALTY_NOTE_RANGE: (f64, f64) = (1e-2, 1e4);
 
-/// What to report about a given `penalty` far from the default `10 E h` (`e`, `h`) for a pair
-/// enforced by `method`, if anything.
+/// What to report about a given `penalty` far from the `default`, `10 E h` (`e`, `h`), for a
+/// pair enforced by `method`, if anything.
 fn penalty_note(
     penalty: Option<f64>,
     method: ContactMethod,
-    (e, h): (f64, f64),
+    (default, e, h): (f64, f64, f64),
     name: &str,
 ) -> Option<String> {
-    let (a, default) = (penalty?, 10.0 * e * h);
+    let a = penalty?;
     let ratio = a / default;
     let (low, high) = PENALTY_NOTE_RANGE;
     if !ratio.is_finite() || ratio == 0.0 || (low..=high).contains(&ratio) {
@@ -724,7 +730,7 @@ mod tests {
     fn a_penalty_far_from_the_default_is_reported() {
         let (e, h) = (2.0e5, 0.5);
         let default = 10.0 * e * h;
-        let note = |a: Option<f64>, method| penalty_note(a, method, (e, h), "p");
+        let note = |a: Option<f64>, method| penalty_note(a, method, (default, e, h), "p");
         let (low, high) = PENALTY_NOTE_RANGE;
         for method in [ContactMethod::Penalty, ContactMethod::Augmented] {
             assert_eq!(note(None, method), None);
