@@ -312,41 +312,34 @@ pub fn resolve(
     ) else {
         return Err(problems);
     };
-    let (m_facets, m_tags) = match oriented_facets(
-        mesh,
-        &master.name,
-        &master.elements,
-        &bodies.elements,
-        &node_elems,
-    ) {
+    let facets = |group: &Group, elements: &[usize], key: &str| {
+        oriented_facets(mesh, &group.name, elements, &bodies.elements, &node_elems)
+            .map_err(|m| format!("{}{m}", at(key)))
+    };
+    let (m_facets, m_tags) = match facets(&master, &master.elements, "master") {
+        Ok(v) if v.0.is_empty() => {
+            problems.push(format!(
+                "{}contact '{name}': master surface has no faces",
+                at("master")
+            ));
+            return Err(problems);
+        }
         Ok(v) => v,
         Err(m) => {
-            problems.push(format!("{}{m}", at("master")));
+            problems.push(m);
             return Err(problems);
         }
     };
-    if m_facets.is_empty() {
-        problems.push(format!(
-            "{}contact '{name}': master surface has no faces",
-            at("master")
-        ));
-        return Err(problems);
-    }
-    let slave_faces: Vec<usize> = if slave.dim == 2 {
+    // A node set has no faces.
+    let slave_faces = if slave.dim == 2 {
         slave.elements.clone()
     } else {
         Vec::new()
     };
-    let (s_facets, s_tags) = match oriented_facets(
-        mesh,
-        &slave.name,
-        &slave_faces,
-        &bodies.elements,
-        &node_elems,
-    ) {
+    let (s_facets, s_tags) = match facets(&slave, &slave_faces, "slave") {
         Ok(v) => v,
         Err(m) => {
-            problems.push(format!("{}{m}", at("slave")));
+            problems.push(m);
             return Err(problems);
         }
     };
@@ -368,28 +361,17 @@ pub fn resolve(
             at("slave")
         ));
     }
-    // Rigid master nodes.
-    for t in &m_facets {
-        for &a in t {
-            if !in_body[a as usize] {
-                rigid[a as usize] = true;
-            }
-        }
-    }
+    mark_rigid(&m_facets, in_body, rigid);
     let e = youngs_modulus(mesh, bodies, &node_elems, &master.elements, &slaves);
     let (h_mean, h_max) = edge_lengths(mesh, &m_facets);
     let default_penalty = 10.0 * e * h_mean;
     let penalty = def.penalty.unwrap_or(default_penalty);
-    // A valid material has a finite, positive modulus: any other `e` comes from a material that
-    // is reported invalid with its own key (`nu = 0.5` gives `E = NaN` here), and the model is
-    // rejected for it, so this pair does not report it again.
-    let modulus_valid = e > 0.0 && e.is_finite();
-    if def.penalty.is_none() && modulus_valid && !(penalty > 0.0 && penalty.is_finite()) {
-        problems.push(format!(
-            "{}contact '{name}': the default penalty 10 E h is {penalty:e} (E = {e:e}, h = {h_mean:e}); give `penalty`",
-            at("penalty")
-        ));
-    }
+    problems.extend(default_penalty_problem(
+        def,
+        (default_penalty, e, h_mean),
+        &name,
+        at,
+    ));
     if !problems.is_empty() {
         return Err(problems);
     }
@@ -422,6 +404,7 @@ pub fn resolve(
         h_max,
     )];
     if def.two_pass {
+        // The master's nodes against the slave's facets.
         let (_, s_max) = edge_lengths(mesh, &s_facets);
         let surface = search_surface(&name, s_facets, &s_tags, mesh, &at("slave"))?;
         passes.push(pass(mesh, None, &master.elements, surface, s_tags, s_max));
@@ -437,6 +420,37 @@ pub fn resolve(
         small_sliding: def.small_sliding,
         passes,
         report,
+    })
+}
+
+/// Marks the nodes of the master `facets` that belong to no body as rigid (they must be fully
+/// prescribed).
+fn mark_rigid(facets: &[[u32; 3]], in_body: &[bool], rigid: &mut [bool]) {
+    for &a in facets.iter().flatten() {
+        if !in_body[a as usize] {
+            rigid[a as usize] = true;
+        }
+    }
+}
+
+/// The problem with the `default` penalty `10 E h` (`e`, `h_mean`) when no `penalty` is given
+/// and the default is not a positive finite number although `E` is (a tiny or huge modulus or
+/// mesh).
+fn default_penalty_problem(
+    def: &ContactDef,
+    (penalty, e, h_mean): (f64, f64, f64),
+    name: &str,
+    at: &dyn Fn(&str) -> String,
+) -> Option<String> {
+    // A valid material has a finite, positive modulus: any other `e` comes from a material that
+    // is reported invalid with its own key (`nu = 0.5` gives `E = NaN` here), and the model is
+    // rejected for it, so this pair does not report it again.
+    let modulus_valid = e > 0.0 && e.is_finite();
+    (def.penalty.is_none() && modulus_valid && !(penalty > 0.0 && penalty.is_finite())).then(|| {
+        format!(
+            "{}contact '{name}': the default penalty 10 E h is {penalty:e} (E = {e:e}, h = {h_mean:e}); give `penalty`",
+            at("penalty")
+        )
     })
 }
 
