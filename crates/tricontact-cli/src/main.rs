@@ -242,18 +242,16 @@ fn verbose_lines(info: &IncrementInfo<'_>, previous: f64) -> Vec<String> {
     let mut lines: Vec<String> = info
         .attempts
         .iter()
-        .map(|&(t, ref why)| {
-            // Every failed attempt is cut back but the one after which the line search came on.
-            let outcome = if why.ends_with(driver::LINE_SEARCH_SWITCH) {
-                "failed"
-            } else {
-                "cut back"
+        .map(|a| {
+            let outcome = match a.retry {
+                driver::Retry::CutBack => "cut back",
+                driver::Retry::LineSearch => "failed",
             };
             format!(
-                "step {} '{}' attempt t = {} {outcome}: {why}",
+                "step {} '{}' attempt t = {} {outcome}: {a}",
                 info.step + 1,
                 info.step_name,
-                load_factor_text(t, t - previous, 4)
+                load_factor_text(a.target, a.target - previous, 4)
             )
         })
         .collect();
@@ -283,9 +281,9 @@ fn failed_attempts(an: &Analysis, e: &FemError) -> Vec<String> {
         .map_or(0, |i| i + 1);
     attempts
         .iter()
-        .map(|(t, why)| {
-            let t = load_factor_text(*t, t - load_factor, 4);
-            format!("step {number} '{step}' attempt t = {t} failed: {why}")
+        .map(|a| {
+            let t = load_factor_text(a.target, a.target - load_factor, 4);
+            format!("step {number} '{step}' attempt t = {t} failed: {a}")
         })
         .collect()
 }

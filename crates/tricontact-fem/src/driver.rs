@@ -29,7 +29,7 @@
 //! `"auto"` (the default) the step starts without it; the first attempt that fails on an
 //! inverted element where the line search applies (the residual is an energy gradient) is
 //! retried at the same size with the line search, which stays on for the rest of the step. That
-//! attempt is not a cutback (its reason ends with [`LINE_SEARCH_SWITCH`]); a line search costs
+//! attempt is not a cutback ([`Retry::LineSearch`]); a line search costs
 //! iterations where Newton recovers from an overshoot by itself, which is why it does not start on.
 
 use crate::analysis::{Analysis, Load, Step};
@@ -79,8 +79,41 @@ pub struct IncrementInfo<'a> {
     pub point_fields: &'a [PointField],
     /// Extra history columns at the committed state.
     pub history: &'a [(String, f64)],
-    /// The attempts cut back before this increment converged: target load factor and why.
-    pub attempts: &'a [(f64, String)],
+    /// The attempts that failed before this increment converged.
+    pub attempts: &'a [Attempt],
+}
+
+/// One failed attempt at an increment: the load factor it aimed at, why it failed, and how it was
+/// retried.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Attempt {
+    /// The load factor the attempt aimed at.
+    pub target: f64,
+    /// Why it failed.
+    pub reason: String,
+    /// What came after it.
+    pub retry: Retry,
+}
+
+/// How a failed attempt was followed up.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Retry {
+    /// A smaller increment (a cutback), or none when the cutbacks ran out.
+    CutBack,
+    /// The same increment with the line search, on for the rest of the step
+    /// (`line_search = "auto"`); not a cutback.
+    LineSearch,
+}
+
+impl std::fmt::Display for Attempt {
+    /// The reason, followed by [`LINE_SEARCH_SWITCH`] for an attempt after which the line search
+    /// came on.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.retry {
+            Retry::CutBack => write!(f, "{}", self.reason),
+            Retry::LineSearch => write!(f, "{}; {LINE_SEARCH_SWITCH}", self.reason),
+        }
+    }
 }
 
 impl IncrementInfo<'_> {
@@ -276,7 +309,7 @@ const MULTIPLIER_HINT: &str = "; with Lagrange multipliers this usually means sl
 const LINE_SEARCH_HINT: &str = "; line_search = true (or \"auto\", the default) in this [[step]] may get through: it shortens a Newton correction that inverts an element";
 
 /// Appended to the reason of an attempt after which `line_search = "auto"` switched the line
-/// search on.
+/// search on, when it is shown ([`Attempt`]'s `Display`).
 pub const LINE_SEARCH_SWITCH: &str =
     "retried at the same size with the line search, on for the rest of the step";
 
@@ -349,7 +382,7 @@ fn run_step(
     let mut control = IncrementControl::new(step.increments, step.max_cutbacks);
     let mut t = 0.0;
     let mut increment = 0;
-    let mut attempts: Vec<(f64, String)> = Vec::new();
+    let mut attempts: Vec<Attempt> = Vec::new();
     // The last converged increment of this step: `u_n − u_{n−1}` and its `Δt`.
     let mut last: Option<(Vec<f64>, f64)> = None;
     // `∫ r_ref dt` over the step's converged increments, for the force scale `q̄`.
@@ -433,7 +466,11 @@ fn run_step(
                 extra.restore();
                 line_search = true;
                 carried.summary.line_search_switches += 1;
-                attempts.push((t_new, format!("{failure}; {LINE_SEARCH_SWITCH}")));
+                attempts.push(Attempt {
+                    target: t_new,
+                    reason: failure.to_string(),
+                    retry: Retry::LineSearch,
+                });
             }
             Err(failure) => {
                 carried.summary.cutbacks += 1;
@@ -465,7 +502,7 @@ fn cut_back(
     failure: Failure,
     extra: &mut dyn ExtraTerms,
     control: &mut IncrementControl,
-    attempts: &mut Vec<(f64, String)>,
+    attempts: &mut Vec<Attempt>,
 ) -> Result<()> {
     let step = problem.step;
     let hint = failure_hint(&failure, extra, problem.dm);
@@ -476,7 +513,11 @@ fn cut_back(
             step.name
         )));
     }
-    attempts.push((t_new, failure.to_string()));
+    attempts.push(Attempt {
+        target: t_new,
+        reason: failure.to_string(),
+        retry: Retry::CutBack,
+    });
     if control.failed() {
         return Ok(());
     }

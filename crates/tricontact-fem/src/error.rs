@@ -102,9 +102,9 @@ pub enum FemError {
         reason: String,
         /// How the cutbacks ran out (their number, or the smallest increment reached).
         exhausted: String,
-        /// Every attempt of the failed increment: the load factor it aimed at and why it failed
-        /// (for a verbose log; the message gives the last).
-        attempts: Vec<(f64, String)>,
+        /// Every attempt of the failed increment (for a verbose log; the message gives the
+        /// last).
+        attempts: Vec<crate::driver::Attempt>,
     },
     /// Writing results failed.
     #[error("output: {0}")]

@@ -6,7 +6,7 @@ mod common;
 
 use tricontact_fem::analysis::Analysis;
 use tricontact_fem::contact::ContactTerms;
-use tricontact_fem::driver::LINE_SEARCH_SWITCH;
+use tricontact_fem::driver::Retry;
 use tricontact_fem::mesh::{ElementKind, Mesh};
 use tricontact_fem::model::{LineSearchMode, Model};
 use tricontact_fem::structured::box_mesh;
@@ -903,8 +903,8 @@ fn an_inverted_element_switches_the_automatic_line_search_on() {
         let mut terms = ContactTerms::new(&an);
         let mut attempts = Vec::new();
         let summary = tricontact_fem::driver::run(&an, &mut terms, &mut |info| {
-            for (t, why) in info.attempts {
-                attempts.push((info.step, *t, why.clone()));
+            for a in info.attempts {
+                attempts.push((info.step, a.clone()));
             }
             Ok(())
         })
@@ -915,18 +915,18 @@ fn an_inverted_element_switches_the_automatic_line_search_on() {
     assert_eq!(auto.line_search_switches, 1);
     let switched: Vec<_> = attempts
         .iter()
-        .filter(|(_, _, why)| why.ends_with(LINE_SEARCH_SWITCH))
+        .filter(|(_, a)| a.retry == Retry::LineSearch)
         .collect();
     assert_eq!(switched.len(), 1, "{attempts:?}");
-    let (step, t, why) = switched[0];
+    let (step, a) = switched[0];
     assert_eq!(
-        (*step, *t),
+        (*step, a.target),
         (1, 0.125),
-        "the slide's first increment: {why}"
+        "the slide's first increment: {a}"
     );
     assert!(
-        why.starts_with("element ") && why.contains("inverted"),
-        "{why}"
+        a.reason.starts_with("element ") && a.reason.contains("inverted"),
+        "{a}"
     );
     // Not counted as a cutback: one attempt fewer than the attempts listed.
     assert_eq!(auto.cutbacks, attempts.len() - 1);
