@@ -13,7 +13,7 @@ use crate::search::bvh::{Bvh, TREE};
 use crate::search::lanes::{self, PAIRS, Pairs, V};
 use crate::search::layout::index;
 use crate::search::query::{Hit, Query, check_answers, squared_limit};
-use crate::search::screen::{Bounds, Limits, Listed, NEAR, Stage};
+use crate::search::screen::{Bounds, Limits, Listed, NEAR, Outcome, Stage};
 use crate::search::surface::{Surface, SurfaceError};
 
 /// Queries answered in one sequential run of [`Neighbourhoods::closest_all_into`].
@@ -93,6 +93,55 @@ struct Open {
     clear: bool,
     fallback: bool,
 }
+/// The lists a chunk of queries fills as its groups are settled, for the work at its end: the
+/// queries left open (with facets put aside or a list to walk), the (query in `open`, facet)
+/// pairs put aside, and the queries in `open` (with their first facet's distance) whose lists are
+/// to be walked further; and the facets measured and the queries that fall back to the tree.
+struct Work {
+    open: Vec<Open>,
+    aside: Vec<(u32, u32)>,
+    walks: Vec<(u32, f64)>,
+    measured: usize,
+    fallbacks: Vec<(usize, Option<u32>)>,
+}
+
+impl Work {
+    /// Room for the usual case of `queries` queries, so that a chunk allocates once per list
+    /// (growing them from empty cost about 5 % of the search at 10⁶ queries).
+    fn with_capacity(queries: usize) -> Self {
+        Self {
+            open: Vec::with_capacity(queries),
+            aside: Vec::with_capacity(NEAR * queries),
+            walks: Vec::with_capacity(queries),
+            measured: 0,
+            fallbacks: Vec::new(),
+        }
+    }
+}
+
+/// A group of lanes measured and screened: each lane's squared distance and distance to its
+/// first listed facet, and the bits of the lanes staged (`live`), whose first facet is clearly
+/// not degenerate (`clear`), that were screened (`screenable`: no facet degenerate when the lists
+/// were made is valid now) and that are certified at once (`done`), with the screen's outcome.
+struct GroupOutcome {
+    d2: [f64; PAIRS],
+    distance: [f64; PAIRS],
+    live: u32,
+    clear: u32,
+    screen: Outcome,
+    screenable: u32,
+    done: u32,
+}
+
+/// One lane of a group: its place `k` in the group, its query's place in the chunk and its
+/// index among all queries.
+#[derive(Clone, Copy)]
+struct Lane {
+    k: usize,
+    place: usize,
+    query: usize,
+}
+
 impl Neighbourhoods {
     /// Writes each surface node's motion `x − x₀` since the lists were made into `moves` (resized
     /// to the nodes) and returns the longest (NaN if one is NaN), in one pass.
@@ -218,8 +267,11 @@ impl Neighbourhoods {
     }
 
     /// Answers the queries `first..first + queries.len()` into `hits` (see the module
-    /// documentation, "Order of work"). Returns the facets measured and the uncertified queries
-    /// with their best facet.
+    /// documentation, "Order of work"): a group of lanes at a time, each group staged
+    /// ([`Self::stage_group`]), measured and screened ([`Self::measure_group`]) and its queries
+    /// settled ([`Self::settle`]); then the walks, the facets put aside and the queries left open
+    /// ([`Self::close`]). Returns the facets measured and the uncertified queries with their best
+    /// facet.
     fn answer_chunk(
         &self,
         first: usize,
@@ -227,22 +279,13 @@ impl Neighbourhoods {
         shared: &Shared<'_>,
         hits: &mut [Option<Hit>],
     ) -> (usize, Vec<(usize, Option<u32>)>) {
-        let mut measured = 0;
-        let mut fallbacks = Vec::new();
+        let mut work = Work::with_capacity(queries.len());
         let mut pairs = Pairs::default();
         let mut stage = Stage::default();
-        // The queries with facets put aside, the (query in `open`, facet) pairs, and the queries
-        // in `open` (with their first facet's distance) whose lists are to be walked further.
-        // Room for the usual case, so that a chunk allocates once per list (growing them from
-        // empty cost about 5 % of the search at 10⁶ queries).
-        let mut open: Vec<Open> = Vec::with_capacity(queries.len());
-        let mut aside: Vec<(u32, u32)> = Vec::with_capacity(NEAR * queries.len());
-        let mut walks: Vec<(u32, f64)> = Vec::with_capacity(queries.len());
         let limits = Limits {
             delta: shared.delta,
             max_distance: shared.max2.sqrt(),
         };
-        let positions = shared.positions;
         for g in (0..queries.len()).step_by(PAIRS) {
             let len = (queries.len() - g).min(PAIRS);
             // The answers four groups on are written soon: their lines asked for now, so that
@@ -250,142 +293,223 @@ impl Neighbourhoods {
             if let Some(ahead) = hits.get(g + 4 * PAIRS..g + 5 * PAIRS) {
                 prefetch_for_write(ahead);
             }
-            // Lane k: the first listed facet of query g + k, unless the list is empty or the
-            // query excludes it.
-            let mut live = 0u32;
-            let group = &self.heads[first + g..first + g + len];
-            for (k, (h, q)) in group.iter().zip(&queries[g..g + len]).enumerate() {
-                if h.facet == NONE || q.excludes(shared.surface, h.facet) || !q.is_finite() {
-                    continue;
-                }
-                pairs.set(k, &shared.corners(h.facet), &q.point);
-                let near = [
-                    self.listed(shared, &h.near[0]),
-                    self.listed(shared, &h.near[1]),
-                ];
-                stage.set(k, &h.point, (f64::from(h.reach), f64::from(h.after)), &near);
-                live |= 1 << k;
-            }
-            let mut d2 = [0.0; PAIRS];
-            let mut distance = [0.0; PAIRS];
-            let lanes_distance = lanes::closest_pairs(&pairs, live, |k, closest, d| {
-                d2[k] = d;
-                distance[k] = closest.distance;
-                hits[g + k] = Some(Hit {
-                    facet: group[k].facet,
-                    closest,
-                });
-            });
-            let clear = if shared.sound {
-                live
-            } else {
-                lanes::clearly_valid(&pairs, 2.0 * DEGENERACY_TOLERANCE) & live
-            };
-            let b = lanes_distance.unwrap_or_else(|| V::new(distance));
-            let screen = stage.screen(&pairs.points, b, limits);
-            let screenable = if shared.valid.is_empty() { live } else { 0 };
-            // Certified at once: the usual case.
-            let done = screenable
-                & clear
-                & screen.unlisted
-                & screen.later
-                & !(screen.need[0] | screen.need[1]);
-            measured += done.count_ones() as usize;
+            let group = &queries[g..g + len];
+            let live = self.stage_group(first + g, group, shared, &mut pairs, &mut stage);
+            let outcome = self.measure_group(
+                (first + g, live),
+                shared,
+                (&pairs, &stage, limits),
+                &mut hits[g..g + len],
+            );
+            work.measured += outcome.done.count_ones() as usize;
             let all = (1u32 << len) - 1;
             // Unless every distance is within (no limit), each answer is checked against it.
             let mut left = if shared.max2 != f64::INFINITY {
                 all
             } else {
-                all & !done
+                all & !outcome.done
             };
             while left != 0 {
                 let k = left.trailing_zeros() as usize;
                 left &= left - 1;
-                let (bit, c, i) = (1u32 << k, g + k, first + g + k);
-                let (q, h) = (&queries[c], &self.heads[i]);
-                if done & bit != 0 {
-                    if outside_limit(d2[k], shared.max2) {
-                        hits[c] = None;
-                    }
-                    continue;
-                }
-                if screenable & bit == 0 {
-                    let head = (live & bit != 0).then(|| Best {
-                        d2: d2[k],
-                        distance: distance[k],
-                        facet: h.facet,
-                        closest: None,
-                    });
-                    let (outcome, n) =
-                        self.answer((i, q), shared, head, clear & bit != 0, &mut hits[c]);
-                    measured += n;
-                    if let Err(hint) = outcome {
-                        fallbacks.push((i, hint));
-                    }
-                    continue;
-                }
-                let o = index(open.len());
-                let before = aside.len();
-                let mut put = |f: u32| {
-                    if !q.excludes(shared.surface, f) {
-                        // Measured at the chunk's end: its corners fetched from now on.
-                        for n in shared.nodes(f) {
-                            prefetch(&positions[n as usize]);
-                        }
-                        aside.push((o, f));
-                    }
+                let lane = Lane {
+                    k,
+                    place: g + k,
+                    query: first + g + k,
                 };
-                for (j, e) in h.near.iter().enumerate() {
-                    if screen.need[j] & bit != 0 && e.listed() {
-                        put(e.facet);
-                    }
-                }
-                let walk = screen.later & bit == 0;
-                measured += 1 + aside.len() - before;
-                let unlisted = screen.unlisted & bit != 0;
-                if aside.len() > before || walk {
-                    if walk {
-                        walks.push((o, distance[k]));
-                        // Its further entries are read at the chunk's end: fetched from now on,
-                        // the line of the first and that of the sixth (a walk reads 3.7 of them
-                        // on the benchmark's 10⁶-facet torus, twelve bytes each).
-                        for at in [0, 5] {
-                            if let Some(e) = self.entries.get(h.start as usize + at) {
-                                prefetch(e);
-                            }
-                        }
-                    }
-                    open.push(Open {
-                        place: index(c),
-                        d2: d2[k],
-                        facet: h.facet,
-                        clear: clear & bit != 0,
-                        fallback: !unlisted,
-                    });
-                } else if !unlisted
-                    || (clear & bit == 0
-                        && is_degenerate(&shared.surface.corners(h.facet, positions)))
-                {
-                    fallbacks.push((i, Some(h.facet)));
-                } else if outside_limit(d2[k], shared.max2) {
-                    hits[c] = None;
-                }
+                self.settle(lane, &queries[g + k], &outcome, shared, &mut work, hits);
             }
         }
-        measured += self.walk(first, queries, shared, &walks, &open, &mut aside);
-        self.measure_aside(queries, shared, &aside, &mut open, hits);
-        for o in &open {
+        work.measured += self.walk(
+            first,
+            queries,
+            shared,
+            &work.walks,
+            &work.open,
+            &mut work.aside,
+        );
+        self.measure_aside(queries, shared, &work.aside, &mut work.open, hits);
+        self.close(first, shared, &mut work, hits);
+        (work.measured, work.fallbacks)
+    }
+
+    /// Stages the group of queries `first..first + group.len()`: lane `k` gets the first listed
+    /// facet of query `first + k` and the point (in `pairs`), and what the screen needs of its
+    /// record and of its next listed facets (in `stage`), unless the list is empty, the query
+    /// excludes that facet or its point is not finite. Returns the bits of the lanes staged.
+    #[inline(always)]
+    fn stage_group(
+        &self,
+        first: usize,
+        group: &[Query],
+        shared: &Shared<'_>,
+        pairs: &mut Pairs,
+        stage: &mut Stage,
+    ) -> u32 {
+        let mut live = 0u32;
+        let heads = &self.heads[first..first + group.len()];
+        for (k, (h, q)) in heads.iter().zip(group).enumerate() {
+            if h.facet == NONE || q.excludes(shared.surface, h.facet) || !q.is_finite() {
+                continue;
+            }
+            pairs.set(k, &shared.corners(h.facet), &q.point);
+            let near = [
+                self.listed(shared, &h.near[0]),
+                self.listed(shared, &h.near[1]),
+            ];
+            stage.set(k, &h.point, (f64::from(h.reach), f64::from(h.after)), &near);
+            live |= 1 << k;
+        }
+        live
+    }
+
+    /// Measures the staged group (queries from `first`, lanes `live`): writes each lane's first
+    /// facet as its query's answer into `hits` (the group's), and screens the lanes.
+    #[inline(always)]
+    fn measure_group(
+        &self,
+        (first, live): (usize, u32),
+        shared: &Shared<'_>,
+        (pairs, stage, limits): (&Pairs, &Stage, Limits),
+        hits: &mut [Option<Hit>],
+    ) -> GroupOutcome {
+        let mut d2 = [0.0; PAIRS];
+        let mut distance = [0.0; PAIRS];
+        let heads = &self.heads[first..first + hits.len()];
+        let lanes_distance = lanes::closest_pairs(pairs, live, |k, closest, d| {
+            d2[k] = d;
+            distance[k] = closest.distance;
+            hits[k] = Some(Hit {
+                facet: heads[k].facet,
+                closest,
+            });
+        });
+        let clear = if shared.sound {
+            live
+        } else {
+            lanes::clearly_valid(pairs, 2.0 * DEGENERACY_TOLERANCE) & live
+        };
+        let b = lanes_distance.unwrap_or_else(|| V::new(distance));
+        let screen = stage.screen(&pairs.points, b, limits);
+        let screenable = if shared.valid.is_empty() { live } else { 0 };
+        // Certified at once: the usual case.
+        let done = screenable
+            & clear
+            & screen.unlisted
+            & screen.later
+            & !(screen.need[0] | screen.need[1]);
+        GroupOutcome {
+            d2,
+            distance,
+            live,
+            clear,
+            screen,
+            screenable,
+            done,
+        }
+    }
+
+    /// Settles one lane of a measured group: a certified answer is checked against the distance
+    /// limit; a query that was not screened is answered one facet at a time ([`Self::answer`]);
+    /// a screened one puts aside the listed facets its screen could not exclude and is left open,
+    /// to walk its list further if the screen says so, or falls back to the tree.
+    #[inline(always)]
+    fn settle(
+        &self,
+        lane: Lane,
+        q: &Query,
+        outcome: &GroupOutcome,
+        shared: &Shared<'_>,
+        work: &mut Work,
+        hits: &mut [Option<Hit>],
+    ) {
+        let Lane {
+            k,
+            place: c,
+            query: i,
+        } = lane;
+        let bit = 1u32 << k;
+        let h = &self.heads[i];
+        let (d2, distance) = (outcome.d2[k], outcome.distance[k]);
+        let clear = outcome.clear & bit != 0;
+        if outcome.done & bit != 0 {
+            if outside_limit(d2, shared.max2) {
+                hits[c] = None;
+            }
+            return;
+        }
+        if outcome.screenable & bit == 0 {
+            let head = (outcome.live & bit != 0).then_some(Best {
+                d2,
+                distance,
+                facet: h.facet,
+                closest: None,
+            });
+            let (answer, n) = self.answer((i, q), shared, head, clear, &mut hits[c]);
+            work.measured += n;
+            if let Err(hint) = answer {
+                work.fallbacks.push((i, hint));
+            }
+            return;
+        }
+        let screen = &outcome.screen;
+        let o = index(work.open.len());
+        let before = work.aside.len();
+        for (j, e) in h.near.iter().enumerate() {
+            if screen.need[j] & bit != 0 && e.listed() && !q.excludes(shared.surface, e.facet) {
+                // Measured at the chunk's end: its corners fetched from now on.
+                for n in shared.nodes(e.facet) {
+                    prefetch(&shared.positions[n as usize]);
+                }
+                work.aside.push((o, e.facet));
+            }
+        }
+        let walk = screen.later & bit == 0;
+        work.measured += 1 + work.aside.len() - before;
+        let unlisted = screen.unlisted & bit != 0;
+        if work.aside.len() > before || walk {
+            if walk {
+                work.walks.push((o, distance));
+                // Its further entries are read at the chunk's end: fetched from now on, the line
+                // of the first and that of the sixth (a walk reads 3.7 of them on the benchmark's
+                // 10⁶-facet torus, twelve bytes each).
+                for at in [0, 5] {
+                    if let Some(e) = self.entries.get(h.start as usize + at) {
+                        prefetch(e);
+                    }
+                }
+            }
+            work.open.push(Open {
+                place: index(c),
+                d2,
+                facet: h.facet,
+                clear,
+                fallback: !unlisted,
+            });
+        } else if !unlisted
+            || (!clear && is_degenerate(&shared.surface.corners(h.facet, shared.positions)))
+        {
+            work.fallbacks.push((i, Some(h.facet)));
+        } else if outside_limit(d2, shared.max2) {
+            hits[c] = None;
+        }
+    }
+
+    /// Settles the queries left open once their facets put aside are measured: a query whose
+    /// unlisted facets were not excluded, or whose best facet is degenerate now, falls back to
+    /// the tree; the others' answers are checked against the distance limit.
+    fn close(&self, first: usize, shared: &Shared<'_>, work: &mut Work, hits: &mut [Option<Hit>]) {
+        for o in &work.open {
             let c = o.place as usize;
             let degenerate = !o.clear
                 && !shared.sound
-                && is_degenerate(&shared.surface.corners(o.facet, positions));
+                && is_degenerate(&shared.surface.corners(o.facet, shared.positions));
             if o.fallback || degenerate {
-                fallbacks.push((first + c, Some(o.facet)));
+                work.fallbacks.push((first + c, Some(o.facet)));
             } else if outside_limit(o.d2, shared.max2) {
                 hits[c] = None;
             }
         }
-        (measured, fallbacks)
     }
 
     /// Walks the rest of the lists of the queries `walks` (their places in `open`, and their first
