@@ -353,6 +353,79 @@ struct Carried {
     force_scale: f64,
 }
 
+/// What a step fixes before its first increment: its constraints (the prescribed mask and the
+/// targets of the prescribed DOFs), equation numbering, matrix pattern and linear solver (with
+/// its equation order), the displacements it starts from, and the reactions of the DOFs it
+/// releases (ramped down to zero over the step).
+struct StepSystem {
+    mask: Vec<bool>,
+    targets: Vec<(usize, f64)>,
+    dm: DofMap,
+    pat: Pattern,
+    solver: LinearSolver,
+    u_step: Vec<f64>,
+    released: Vec<(usize, f64)>,
+}
+
+impl StepSystem {
+    /// The system of step `s` from the committed state in `carried`.
+    ///
+    /// # Errors
+    /// A body with too few supports (when the extra terms cannot hold bodies).
+    fn new(an: &Analysis, s: usize, extra: &dyn ExtraTerms, carried: &Carried) -> Result<Self> {
+        let step = &an.steps[s];
+        let (mask, targets) = step_constraints(an, s);
+        if !extra.supports_bodies() {
+            check_supports(an, &mask)
+                .map_err(|m| FemError::Singular(format!("step '{}': {m}", step.name)))?;
+        }
+        let dm = DofMap::new(&an.active_nodes, &mask, extra.num_extra());
+        let adj = node_adjacency(an);
+        let pat = Pattern::from_adjacency(&adj, an, &dm);
+        let order = equation_order(&an.mesh.nodes, &adj, &dm, &extra.extra_nodes());
+        let released = (0..an.num_nodal_dofs())
+            .filter(|&d| carried.mask.get(d).copied().unwrap_or(false) && !mask[d])
+            .map(|d| (d, carried.reactions[d]))
+            .collect();
+        Ok(Self {
+            mask,
+            targets,
+            dm,
+            pat,
+            solver: LinearSolver::new().with_order(order),
+            u_step: carried.summary.u.clone(),
+            released,
+        })
+    }
+
+    /// The loads at load factor `t` of step `s`: external forces (with the released reactions'
+    /// remainder), prescribed values and follower pressures.
+    fn loads(&self, an: &Analysis, s: usize, t: f64) -> Loads {
+        let mut fext = external_forces(an, self.u_step.len(), s, t);
+        for &(d, r) in &self.released {
+            fext[d] += (1.0 - t) * r;
+        }
+        let u = &self.u_step;
+        let prescribed = self
+            .targets
+            .iter()
+            .map(|&(dof, v)| (dof, u[dof] + t * (v - u[dof])))
+            .collect();
+        Loads {
+            fext,
+            prescribed,
+            follower: follower_pressures(an, s, t),
+        }
+    }
+}
+
+/// The loads of one increment (see [`StepSystem::loads`]).
+struct Loads {
+    fext: Vec<f64>,
+    prescribed: Vec<(usize, f64)>,
+    follower: Vec<(usize, f64)>,
+}
+
 /// Runs step `s` from the committed state in `carried`, increment by increment with cutbacks.
 fn run_step(
     an: &Analysis,
@@ -362,23 +435,7 @@ fn run_step(
     observer: &mut dyn FnMut(&IncrementInfo<'_>) -> Result<()>,
 ) -> Result<()> {
     let step = &an.steps[s];
-    let (mask, targets) = step_constraints(an, s);
-    if !extra.supports_bodies() {
-        check_supports(an, &mask)
-            .map_err(|m| FemError::Singular(format!("step '{}': {m}", step.name)))?;
-    }
-    let dm = DofMap::new(&an.active_nodes, &mask, extra.num_extra());
-    let adj = node_adjacency(an);
-    let pat = Pattern::from_adjacency(&adj, an, &dm);
-    let order = equation_order(&an.mesh.nodes, &adj, &dm, &extra.extra_nodes());
-    let mut solver = LinearSolver::new().with_order(order);
-    drop(adj);
-    let u_step = carried.summary.u.clone();
-    // Reactions of DOFs released at this step are ramped down to zero.
-    let released: Vec<(usize, f64)> = (0..an.num_nodal_dofs())
-        .filter(|&d| carried.mask.get(d).copied().unwrap_or(false) && !mask[d])
-        .map(|d| (d, carried.reactions[d]))
-        .collect();
+    let mut system = StepSystem::new(an, s, extra, carried)?;
     let mut control = IncrementControl::new(step.increments, step.max_cutbacks);
     let mut t = 0.0;
     let mut increment = 0;
@@ -391,23 +448,15 @@ fn run_step(
     let mut line_search = step.line_search == LineSearchMode::On;
     while t < 1.0 - 1e-12 {
         let t_new = control.target(t);
-        let mut fext = external_forces(an, carried.summary.u.len(), s, t_new);
-        for &(d, r) in &released {
-            fext[d] += (1.0 - t_new) * r;
-        }
-        let prescribed: Vec<(usize, f64)> = targets
-            .iter()
-            .map(|&(dof, v)| (dof, u_step[dof] + t_new * (v - u_step[dof])))
-            .collect();
-        let follower = follower_pressures(an, s, t_new);
+        let loads = system.loads(an, s, t_new);
         let problem = IncrementProblem {
             an,
-            dm: &dm,
-            pat: &pat,
+            dm: &system.dm,
+            pat: &system.pat,
             step,
-            fext: &fext,
-            prescribed: &prescribed,
-            follower: &follower,
+            fext: &loads.fext,
+            prescribed: &loads.prescribed,
+            follower: &loads.follower,
             force_scale: if t > 0.0 {
                 reference_integral / t
             } else {
@@ -420,7 +469,7 @@ fn run_step(
             (Some((du, dt)), Extrapolation::Linear, true) => extrapolated(u, du, (t_new - t) / dt),
             _ => u.clone(),
         };
-        match solve_with_outer(&problem, extra, u, &start, &mut solver) {
+        match solve_with_outer(&problem, extra, u, &start, &mut system.solver) {
             Ok(c) => {
                 extra.commit();
                 let du = c.u.iter().zip(u).map(|(a, b)| a - b).collect();
@@ -428,36 +477,21 @@ fn run_step(
                 reference_integral += c.reference * (t_new - t);
                 t = t_new;
                 increment += 1;
-                let summary = &mut carried.summary;
-                summary.increments += 1;
-                summary.iterations += c.iterations;
-                carried.reactions.fill(0.0);
-                for &(dof, _) in &targets {
-                    carried.reactions[dof] = c.residual[dof];
-                }
-                summary.u = c.u;
-                let point_fields = extra.point_fields();
-                let history = extra.history();
-                observer(&IncrementInfo {
-                    step: s,
-                    step_name: &step.name,
+                let at = Reached {
+                    s,
                     increment,
-                    load_factor: t,
-                    time: s as f64 + t,
-                    iterations: c.iterations,
-                    line_searches: c.line_searches,
-                    residuals: &c.residuals,
-                    reference: c.reference,
+                    t,
                     cutbacks: control.cutbacks_here,
-                    u: &summary.u,
-                    reactions: &carried.reactions,
-                    nlgeom: step.nlgeom,
-                    method: c.method,
-                    notes: &c.notes,
-                    point_fields: &point_fields,
-                    history: &history,
-                    attempts: &attempts,
-                })?;
+                };
+                commit(
+                    an,
+                    at,
+                    c,
+                    (&system.targets, &attempts),
+                    extra,
+                    carried,
+                    observer,
+                )?;
                 attempts.clear();
                 control.converged();
             }
@@ -485,9 +519,66 @@ fn run_step(
             }
         }
     }
-    carried.mask = mask;
+    carried.mask = system.mask;
     carried.force_scale = reference_integral / t;
     Ok(())
+}
+
+/// Where a converged increment ends: step `s`, its increment number in the step, load factor `t`
+/// and the cutbacks it took.
+#[derive(Clone, Copy)]
+struct Reached {
+    s: usize,
+    increment: usize,
+    t: f64,
+    cutbacks: usize,
+}
+
+/// Commits the converged increment `c` into `carried` (displacements, counts, the reactions at
+/// the prescribed DOFs `targets`) and shows it to `observer` with the `attempts` before it.
+///
+/// # Errors
+/// The observer's.
+fn commit(
+    an: &Analysis,
+    at: Reached,
+    c: Converged,
+    (targets, attempts): (&[(usize, f64)], &[Attempt]),
+    extra: &mut dyn ExtraTerms,
+    carried: &mut Carried,
+    observer: &mut dyn FnMut(&IncrementInfo<'_>) -> Result<()>,
+) -> Result<()> {
+    let step = &an.steps[at.s];
+    let summary = &mut carried.summary;
+    summary.increments += 1;
+    summary.iterations += c.iterations;
+    carried.reactions.fill(0.0);
+    for &(dof, _) in targets {
+        carried.reactions[dof] = c.residual[dof];
+    }
+    summary.u = c.u;
+    let point_fields = extra.point_fields();
+    let history = extra.history();
+    observer(&IncrementInfo {
+        step: at.s,
+        step_name: &step.name,
+        increment: at.increment,
+        load_factor: at.t,
+        time: at.s as f64 + at.t,
+        iterations: c.iterations,
+        line_searches: c.line_searches,
+        residuals: &c.residuals,
+        reference: c.reference,
+        cutbacks: at.cutbacks,
+        u: &summary.u,
+        reactions: &carried.reactions,
+        nlgeom: step.nlgeom,
+        method: c.method,
+        notes: &c.notes,
+        point_fields: &point_fields,
+        history: &history,
+        attempts,
+    })
 }
 
 /// After the attempt at `t_new` from `t` failed: restores the extra terms' state and records the
