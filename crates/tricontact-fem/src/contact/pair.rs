@@ -469,22 +469,31 @@ fn penalty_note(
     let a = penalty?;
     let ratio = a / default;
     let (low, high) = PENALTY_NOTE_RANGE;
-    if !ratio.is_finite() || ratio == 0.0 || (low..=high).contains(&ratio) {
+    // A positive penalty so far below the default that the ratio underflows to zero.
+    let underflow = ratio == 0.0 && a > 0.0 && default.is_finite();
+    if !ratio.is_finite() || (ratio == 0.0 && !underflow) || (low..=high).contains(&ratio) {
         return None;
     }
+    let (times, inverse) = if underflow {
+        (
+            format!("less than {:.1e}", f64::MIN_POSITIVE),
+            format!("more than {:.1e}", f64::MAX),
+        )
+    } else {
+        (format!("{ratio:.1e}"), format!("{:.1e}", 1.0 / ratio))
+    };
     let effect = match (method, ratio < low) {
         (ContactMethod::Multiplier, _) => {
             "which scales the multipliers' equations as far from the rest of the tangent"
                 .to_string()
         }
         (_, true) => format!(
-            "which makes penetrations (about p/α under a pressure p) {:.1e} times the default's",
-            1.0 / ratio
+            "which makes penetrations (about p/α under a pressure p) {inverse} times the default's"
         ),
         (_, false) => "which makes the tangent about as many times worse conditioned".to_string(),
     };
     Some(format!(
-        "contact '{name}': penalty {a:e} is {ratio:.1e} times the default 10 E h = {default:.4e} \
+        "contact '{name}': penalty {a:e} is {times} times the default 10 E h = {default:.4e} \
          (E = {e:.4e}, h = {h:.4e}), {effect}; check its units"
     ))
 }
@@ -764,6 +773,13 @@ mod tests {
                 "{stiff}"
             );
         }
+        // A positive penalty whose ratio to the default underflows to zero is noted too.
+        let tiny = note(Some(1e-320), ContactMethod::Penalty).expect("underflow");
+        assert!(
+            tiny.contains("is less than 2.2e-308 times the default")
+                && tiny.contains("more than 1.8e308 times the default's"),
+            "{tiny}"
+        );
         let multiplier = note(Some(1e-3 * low * default), ContactMethod::Multiplier).expect("far");
         assert!(
             multiplier.contains("multipliers' equations"),
