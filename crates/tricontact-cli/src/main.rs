@@ -313,12 +313,7 @@ fn run(
         .file_stem()
         .map_or_else(|| "model".to_string(), |s| s.to_string_lossy().into_owned());
     let mut writer = ResultWriter::new(&an, &dir, &stem)?;
-    let total = 1000 * an.steps.len() as u64;
-    let pb = ProgressBar::new(total);
-    pb.set_style(
-        ProgressStyle::with_template("{bar:40} {pos:>5}/{len} {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
+    let pb = progress_bar(an.steps.len());
     for pair in &an.contacts {
         for line in &pair.report {
             say!("{line}");
@@ -366,7 +361,27 @@ fn run(
             say!("{line}");
         }
     }
-    let summary = summary?;
+    report_end(&an, &record, &summary?, &dir)
+}
+
+/// A progress bar over the steps of a run, a thousand ticks each (hidden when not on a terminal).
+fn progress_bar(steps: usize) -> ProgressBar {
+    let pb = ProgressBar::new(1000 * steps as u64);
+    pb.set_style(
+        ProgressStyle::with_template("{bar:40} {pos:>5}/{len} {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    pb
+}
+
+/// The end of a successful run: the contact and Hertz summaries, the plots (written now), and the
+/// `done:` line with the run's counts and where its results are.
+fn report_end(
+    an: &Analysis,
+    record: &RunRecord,
+    summary: &driver::RunSummary,
+    dir: &Path,
+) -> Result<(), FemError> {
     for line in record
         .contact_summary()
         .into_iter()
@@ -375,7 +390,7 @@ fn run(
         say!("{line}");
     }
     if an.output.plots {
-        let plots = record.write_plots(&dir)?;
+        let plots = record.write_plots(dir)?;
         say!(
             "plots: {}",
             plots
