@@ -280,33 +280,34 @@ fn contact_run(n: usize, m: usize) {
     }
 }
 
+/// The value of `r`, or its error printed after `what` and the process ended with status 1.
+fn or_exit<T, E: std::fmt::Display>(r: Result<T, E>, what: &str) -> T {
+    r.unwrap_or_else(|e| {
+        eprintln!("error: {what}{e}");
+        std::process::exit(1);
+    })
+}
+
+/// The number after the argument `flag`, if both are given.
+fn after<T: std::str::FromStr>(flag: &str, skip: usize) -> Option<T> {
+    std::env::args()
+        .skip_while(|a| a != flag)
+        .nth(1 + skip)
+        .and_then(|s| s.parse().ok())
+}
+
 fn main() {
-    if let Some(n) = std::env::args()
-        .skip_while(|a| a != "--contact")
-        .nth(1)
-        .and_then(|s| s.parse::<usize>().ok())
-    {
-        let m = std::env::args()
-            .skip_while(|a| a != "--contact")
-            .nth(2)
-            .and_then(|s| s.parse().ok())
-            .unwrap_or(n.saturating_sub(1).max(1));
+    if let Some(n) = after::<usize>("--contact", 0) {
+        let m = after("--contact", 1).unwrap_or(n.saturating_sub(1).max(1));
         contact_run(n, m);
         return;
     }
+    let first_number = || std::env::args().filter_map(|s| s.parse().ok()).next();
     if std::env::args().any(|a| a == "--vtu") {
-        let n = std::env::args()
-            .filter_map(|s| s.parse().ok())
-            .next()
-            .unwrap_or(45);
-        vtu_encoding(n);
+        vtu_encoding(first_number().unwrap_or(45));
         return;
     }
-    if let Some(m) = std::env::args()
-        .skip_while(|a| a != "--dense")
-        .nth(1)
-        .and_then(|s| s.parse().ok())
-    {
+    if let Some(m) = after("--dense", 0) {
         dense_reference(m);
         return;
     }
@@ -315,52 +316,44 @@ fn main() {
         .and_then(|s| s.parse().ok())
         .unwrap_or(45);
     let t = Instant::now();
-    let mesh = box_mesh([1.0, 1.0, 1.0], [n, n, n], ElementKind::Hex8);
-    let text = "[mesh]\nfile = \"none\"\n[[material]]\nname = \"m\"\ntype = \"linear_elastic\"\nE = 1000.0\nnu = 0.3\n[[body]]\ngroup = \"solid\"\nmaterial = \"m\"\n[[boundary]]\ngroup = \"zmin\"\nfix = [\"x\", \"y\", \"z\"]\n[[load]]\ngroup = \"zmax\"\npressure = 1.0\n[[step]]\n";
-    let model = match Model::parse(text, std::path::Path::new("bench.toml")) {
-        Ok(m) => m,
-        Err(e) => {
-            eprintln!("error: {e}");
-            std::process::exit(1);
-        }
-    };
-    let an = match Analysis::new(&model, mesh) {
-        Ok(a) => a,
-        Err(e) => {
-            eprintln!("error: {e}");
-            std::process::exit(1);
-        }
-    };
+    let an = cube(n);
     let setup = t.elapsed();
     if let Some(path) = inp_path() {
         write_deck(&an, &path, &format!("fem-bench {n}: hex8 cube"));
         return;
     }
-    let (mask, _) = step_constraints(&an, 0);
+    solve_cube(&an, n, std::env::args().any(|a| a == "--amd"), setup);
+}
+
+/// The `n × n × n` hex8 unit cube, clamped at `z = 0` and pressed at `z = 1`.
+fn cube(n: usize) -> Analysis {
+    let mesh = box_mesh([1.0, 1.0, 1.0], [n, n, n], ElementKind::Hex8);
+    let text = "[mesh]\nfile = \"none\"\n[[material]]\nname = \"m\"\ntype = \"linear_elastic\"\nE = 1000.0\nnu = 0.3\n[[body]]\ngroup = \"solid\"\nmaterial = \"m\"\n[[boundary]]\ngroup = \"zmin\"\nfix = [\"x\", \"y\", \"z\"]\n[[load]]\ngroup = \"zmax\"\npressure = 1.0\n[[step]]\n";
+    let model = or_exit(Model::parse(text, std::path::Path::new("bench.toml")), "");
+    or_exit(Analysis::new(&model, mesh), "")
+}
+
+/// Times each phase of one linear solve of `an` (the cube of size `n`; with `amd`, faer's AMD
+/// ordering instead of the nested dissection) and prints the times (with the `setup` before it),
+/// the sizes and the residual.
+fn solve_cube(an: &Analysis, n: usize, amd: bool, setup: std::time::Duration) {
+    let (mask, _) = step_constraints(an, 0);
     let dm = DofMap::new(&an.active_nodes, &mask, 0);
     let t = Instant::now();
-    let adj = node_adjacency(&an);
-    let pat = Pattern::from_adjacency(&adj, &an, &dm);
-    let amd = std::env::args().any(|a| a == "--amd");
-    let order = if amd {
-        None
-    } else {
-        Some(equation_order(&an.mesh.nodes, &adj, &dm, &[]))
-    };
+    let adj = node_adjacency(an);
+    let pat = Pattern::from_adjacency(&adj, an, &dm);
+    let order = (!amd).then(|| equation_order(&an.mesh.nodes, &adj, &dm, &[]));
     drop(adj);
     let t_pattern = t.elapsed();
     let u = vec![0.0; an.num_nodal_dofs()];
     let t = Instant::now();
-    let asm = match assemble(&an, &dm, &pat, &u, false, true, None, &mut NoExtra) {
-        Ok(a) => a,
-        Err(e) => {
-            eprintln!("error: assembly failed: {e:?}");
-            std::process::exit(1);
-        }
-    };
+    let asm = or_exit(
+        assemble(an, &dm, &pat, &u, false, true, None, &mut NoExtra).map_err(|e| format!("{e:?}")),
+        "assembly failed: ",
+    );
     let t_assembly = t.elapsed();
     let k = asm.matrix(&pat);
-    let f = external_forces(&an, an.num_nodal_dofs(), 0, 1.0);
+    let f = external_forces(an, an.num_nodal_dofs(), 0, 1.0);
     let mut rhs = vec![0.0; dm.n_eq];
     for (dof, &e) in dm.eq.iter().enumerate() {
         if e != tricontact_fem::assembly::NO_EQ {
@@ -372,38 +365,20 @@ fn main() {
         None => LinearSolver::new(),
     };
     let t = Instant::now();
-    if let Err(e) = solver.analyze(k.as_ref()) {
-        eprintln!("error: {}", e.0);
-        std::process::exit(1);
-    }
+    or_exit(solver.analyze(k.as_ref()).map_err(|e| e.0), "");
     let t_symbolic = t.elapsed();
     let t = Instant::now();
-    let factor = match solver.factor(k.as_ref(), Structure::SymmetricDefinite) {
-        Ok(f) => f,
-        Err(e) => {
-            eprintln!("error: {}", e.0);
-            std::process::exit(1);
-        }
-    };
+    let factor = or_exit(
+        solver
+            .factor(k.as_ref(), Structure::SymmetricDefinite)
+            .map_err(|e| e.0),
+        "",
+    );
     let t_numeric = t.elapsed();
     let t = Instant::now();
     let x = factor.solve(&rhs);
     let t_solve = t.elapsed();
-    // Residual check ‖K x − b‖ / ‖b‖.
     let kr = k.as_ref();
-    let mut ax = vec![0.0; dm.n_eq];
-    for (c, xc) in x.iter().enumerate() {
-        for p in kr.col_ptr()[c]..kr.col_ptr()[c + 1] {
-            ax[kr.row_idx()[p]] += kr.val()[p] * xc;
-        }
-    }
-    let res = ax
-        .iter()
-        .zip(&rhs)
-        .map(|(a, b)| (a - b).powi(2))
-        .sum::<f64>()
-        .sqrt()
-        / rhs.iter().map(|b| b * b).sum::<f64>().sqrt();
     println!(
         "hex8 cube {n}^3: {} elements, {} nodes, {} free DOFs, {} nonzeros",
         an.body.len(),
@@ -439,5 +414,24 @@ fn main() {
             "simplicial"
         }
     );
-    println!("relative residual:  {res:.2e}");
+    println!(
+        "relative residual:  {:.2e}",
+        relative_residual(kr, &x, &rhs)
+    );
+}
+
+/// `‖K x − b‖ / ‖b‖`.
+fn relative_residual(
+    k: faer::sparse::SparseColMatRef<'_, usize, f64>,
+    x: &[f64],
+    b: &[f64],
+) -> f64 {
+    let mut kx = vec![0.0; b.len()];
+    for (c, xc) in x.iter().enumerate() {
+        for p in k.col_ptr()[c]..k.col_ptr()[c + 1] {
+            kx[k.row_idx()[p]] += k.val()[p] * xc;
+        }
+    }
+    let norm = |v: &mut dyn Iterator<Item = f64>| v.map(|r| r * r).sum::<f64>().sqrt();
+    norm(&mut kx.iter().zip(b).map(|(a, b)| a - b)) / norm(&mut b.iter().copied())
 }
