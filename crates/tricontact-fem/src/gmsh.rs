@@ -210,8 +210,18 @@ fn parse_error_message(
         find(bytes, s.as_bytes()).is_some()
             && find(bytes, format!("$End{}", &s[1..]).as_bytes()).is_none()
     });
+    // mshio's catch-all, met where a section holds more or fewer lines than its headers count
+    // (a line repeated or dropped): the place is where reading stopped, at or after that line.
+    let catch_all = text.contains("Unknown error occurred");
     let hint = unfinished
         .map(|s| format!(" (the file ends inside {s}: is it complete?)"))
+        .or_else(|| {
+            catch_all.then(|| {
+                " (at or before that line a section holds more or fewer lines than its headers \
+                 count: a line repeated or missing?)"
+                    .to_string()
+            })
+        })
         .unwrap_or_default();
     // Where the innermost parser stopped (its input is a slice of `bytes`).
     let place = e

@@ -881,6 +881,25 @@ fn a_malformed_mesh_line_is_named_by_its_number() {
     }
 }
 
+/// A line repeated in a section (one more line than its header counts) is named by where reading
+/// stopped, with the likely cause: the parser's own message says only "Unknown error occurred".
+#[test]
+fn a_repeated_mesh_line_is_reported_with_its_likely_cause() {
+    let good = msh(4, &TET);
+    for line in ["$EndMeshFormat", "0 1 0", "1 0 0 0 1 1 1 1 1 0", "1 1 2 3 4"] {
+        let bad = good.replacen(&format!("\n{line}\n"), &format!("\n{line}\n{line}\n"), 1);
+        assert_ne!(bad, good, "{line}");
+        let e = gmsh::parse_msh(bad.as_bytes(), Path::new("r.msh")).expect_err(line);
+        let msg = e.to_string();
+        assert!(
+            msg.contains("reading stopped at line ")
+                && msg.contains("holds more or fewer lines than its headers count"),
+            "{line}: {msg}"
+        );
+        assert!(!msg.contains('\n'), "one line: {msg}");
+    }
+}
+
 /// In a binary file the place is a byte offset (lines mean nothing there).
 #[test]
 fn a_malformed_binary_mesh_is_named_by_its_byte() {
