@@ -886,7 +886,12 @@ fn a_malformed_mesh_line_is_named_by_its_number() {
 #[test]
 fn a_repeated_mesh_line_is_reported_with_its_likely_cause() {
     let good = msh(4, &TET);
-    for line in ["$EndMeshFormat", "0 1 0", "1 0 0 0 1 1 1 1 1 0", "1 1 2 3 4"] {
+    for line in [
+        "$EndMeshFormat",
+        "0 1 0",
+        "1 0 0 0 1 1 1 1 1 0",
+        "1 1 2 3 4",
+    ] {
         let bad = good.replacen(&format!("\n{line}\n"), &format!("\n{line}\n{line}\n"), 1);
         assert_ne!(bad, good, "{line}");
         let e = gmsh::parse_msh(bad.as_bytes(), Path::new("r.msh")).expect_err(line);

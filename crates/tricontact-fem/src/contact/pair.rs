@@ -306,61 +306,25 @@ pub fn resolve(
     let name = format!("{}-{}", def.slave, def.master);
     let mut problems = check_parameters(def, &name, at);
     let node_elems = node_to_elements(mesh.nodes.len(), &bodies.elements);
-    let (Some(master), Some(slave)) = (
-        master_group(def, mesh, &name, at, &mut problems),
-        slave_group(def, mesh, &name, at, &mut problems),
-    ) else {
+    let Some(Sides {
+        master,
+        m_facets,
+        m_tags,
+        slave_faces,
+        s_facets,
+        s_tags,
+        slaves,
+    }) = sides(
+        def,
+        mesh,
+        bodies,
+        (&node_elems, in_body),
+        (&name, at),
+        &mut problems,
+    )
+    else {
         return Err(problems);
     };
-    let facets = |group: &Group, elements: &[usize], key: &str| {
-        oriented_facets(mesh, &group.name, elements, &bodies.elements, &node_elems)
-            .map_err(|m| format!("{}{m}", at(key)))
-    };
-    let (m_facets, m_tags) = match facets(&master, &master.elements, "master") {
-        Ok(v) if v.0.is_empty() => {
-            problems.push(format!(
-                "{}contact '{name}': master surface has no faces",
-                at("master")
-            ));
-            return Err(problems);
-        }
-        Ok(v) => v,
-        Err(m) => {
-            problems.push(m);
-            return Err(problems);
-        }
-    };
-    // A node set has no faces.
-    let slave_faces = if slave.dim == 2 {
-        slave.elements.clone()
-    } else {
-        Vec::new()
-    };
-    let (s_facets, s_tags) = match facets(&slave, &slave_faces, "slave") {
-        Ok(v) => v,
-        Err(m) => {
-            problems.push(m);
-            return Err(problems);
-        }
-    };
-    if def.two_pass && s_facets.is_empty() {
-        problems.push(format!(
-            "{}contact '{name}': two_pass needs a surface (2D) slave group",
-            at("slave")
-        ));
-    }
-    let slaves: Vec<usize> = slave
-        .nodes
-        .iter()
-        .copied()
-        .filter(|&a| in_body[a])
-        .collect();
-    if slaves.is_empty() {
-        problems.push(format!(
-            "{}contact '{name}': the slave group has no node of any body",
-            at("slave")
-        ));
-    }
     mark_rigid(&m_facets, in_body, rigid);
     let e = youngs_modulus(mesh, bodies, &node_elems, &master.elements, &slaves);
     let (h_mean, h_max) = edge_lengths(mesh, &m_facets);
@@ -420,6 +384,96 @@ pub fn resolve(
         small_sliding: def.small_sliding,
         passes,
         report,
+    })
+}
+
+/// The two sides of a pair as the mesh gives them: the master group, its oriented facets and
+/// their faces' tags; the slave's faces (none for a node set), facets and tags, and its nodes that
+/// belong to a body.
+struct Sides {
+    master: Group,
+    m_facets: Vec<[u32; 3]>,
+    m_tags: Vec<u64>,
+    slave_faces: Vec<usize>,
+    s_facets: Vec<[u32; 3]>,
+    s_tags: Vec<u64>,
+    slaves: Vec<usize>,
+}
+
+/// The sides of the pair `def` (named `name`; `at` as for [`resolve`]), with every problem found
+/// pushed onto `problems`; `None` when a group or a surface cannot be read (nothing more to
+/// check).
+fn sides(
+    def: &ContactDef,
+    mesh: &Mesh,
+    bodies: &Bodies<'_>,
+    (node_elems, in_body): (&[Vec<usize>], &[bool]),
+    (name, at): (&str, &dyn Fn(&str) -> String),
+    problems: &mut Vec<String>,
+) -> Option<Sides> {
+    let (Some(master), Some(slave)) = (
+        master_group(def, mesh, name, at, problems),
+        slave_group(def, mesh, name, at, problems),
+    ) else {
+        return None;
+    };
+    let facets = |group: &Group, elements: &[usize], key: &str| {
+        oriented_facets(mesh, &group.name, elements, &bodies.elements, node_elems)
+            .map_err(|m| format!("{}{m}", at(key)))
+    };
+    let (m_facets, m_tags) = match facets(&master, &master.elements, "master") {
+        Ok(v) if v.0.is_empty() => {
+            problems.push(format!(
+                "{}contact '{name}': master surface has no faces",
+                at("master")
+            ));
+            return None;
+        }
+        Ok(v) => v,
+        Err(m) => {
+            problems.push(m);
+            return None;
+        }
+    };
+    // A node set has no faces.
+    let slave_faces = if slave.dim == 2 {
+        slave.elements.clone()
+    } else {
+        Vec::new()
+    };
+    let (s_facets, s_tags) = match facets(&slave, &slave_faces, "slave") {
+        Ok(v) => v,
+        Err(m) => {
+            problems.push(m);
+            return None;
+        }
+    };
+    if def.two_pass && s_facets.is_empty() {
+        problems.push(format!(
+            "{}contact '{name}': two_pass needs a surface (2D) slave group",
+            at("slave")
+        ));
+    }
+    let slaves: Vec<usize> = slave
+        .nodes
+        .iter()
+        .copied()
+        .filter(|&a| in_body[a])
+        .collect();
+    if slaves.is_empty() {
+        problems.push(format!(
+            "{}contact '{name}': the slave group has no node of any body",
+            at("slave")
+        ));
+    }
+    Some(Sides {
+        master,
+        m_facets,
+        m_tags,
+        slave_faces,
+        s_facets,
+        s_tags,
+        slaves,
     })
 }
 
