@@ -306,28 +306,25 @@ pub fn resolve(
     let name = format!("{}-{}", def.slave, def.master);
     let mut problems = check_parameters(def, &name, at);
     let node_elems = node_to_elements(mesh.nodes.len(), &bodies.elements);
-    let Some(Sides {
-        master,
-        m_facets,
-        m_tags,
-        slave_faces,
-        s_facets,
-        s_tags,
-        slaves,
-    }) = sides(
+    let Some(sides) = sides(
         def,
         mesh,
         bodies,
         (&node_elems, in_body),
         (&name, at),
         &mut problems,
-    )
-    else {
+    ) else {
         return Err(problems);
     };
-    mark_rigid(&m_facets, in_body, rigid);
-    let e = youngs_modulus(mesh, bodies, &node_elems, &master.elements, &slaves);
-    let (h_mean, h_max) = edge_lengths(mesh, &m_facets);
+    mark_rigid(&sides.m_facets, in_body, rigid);
+    let e = youngs_modulus(
+        mesh,
+        bodies,
+        &node_elems,
+        &sides.master.elements,
+        &sides.slaves,
+    );
+    let (h_mean, h_max) = edge_lengths(mesh, &sides.m_facets);
     let default_penalty = 10.0 * e * h_mean;
     let penalty = def.penalty.unwrap_or(default_penalty);
     problems.extend(default_penalty_problem(
@@ -339,15 +336,15 @@ pub fn resolve(
     if !problems.is_empty() {
         return Err(problems);
     }
-    let surface = search_surface(&name, m_facets, &m_tags, mesh, &at("master"))?;
+    let surface = search_surface(&name, sides.m_facets, &sides.m_tags, mesh, &at("master"))?;
     let mut report = initial_penetrations(
         def,
         &name,
         mesh,
         &surface,
         &Slaves {
-            nodes: &slaves,
-            facets: &s_facets,
+            nodes: &sides.slaves,
+            facets: &sides.s_facets,
             in_body,
         },
         (h_mean, h_max),
@@ -361,17 +358,24 @@ pub fn resolve(
     ));
     let mut passes = vec![pass(
         mesh,
-        Some(slaves),
-        &slave_faces,
+        Some(sides.slaves),
+        &sides.slave_faces,
         surface,
-        m_tags,
+        sides.m_tags,
         h_max,
     )];
     if def.two_pass {
         // The master's nodes against the slave's facets.
-        let (_, s_max) = edge_lengths(mesh, &s_facets);
-        let surface = search_surface(&name, s_facets, &s_tags, mesh, &at("slave"))?;
-        passes.push(pass(mesh, None, &master.elements, surface, s_tags, s_max));
+        let (_, s_max) = edge_lengths(mesh, &sides.s_facets);
+        let surface = search_surface(&name, sides.s_facets, &sides.s_tags, mesh, &at("slave"))?;
+        passes.push(pass(
+            mesh,
+            None,
+            &sides.master.elements,
+            surface,
+            sides.s_tags,
+            s_max,
+        ));
     }
     Ok(ContactPair {
         name,
