@@ -93,6 +93,7 @@ struct Open {
     clear: bool,
     fallback: bool,
 }
+
 /// The lists a chunk of queries fills as its groups are settled, for the work at its end: the
 /// queries left open (with facets put aside or a list to walk), the (query in `open`, facet)
 /// pairs put aside, and the queries in `open` (with their first facet's distance) whose lists are
