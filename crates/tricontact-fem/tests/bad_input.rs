@@ -881,8 +881,9 @@ fn a_malformed_mesh_line_is_named_by_its_number() {
     }
 }
 
-/// A line repeated in a section (one more line than its header counts) is named by where reading
-/// stopped, with the likely cause: the parser's own message says only "Unknown error occurred".
+/// A repeated line (one more than a section's header counts, or a stray line between sections) is
+/// named by where reading stopped, with the likely cause: the parser's own message says only
+/// "Unknown error occurred".
 #[test]
 fn a_repeated_mesh_line_is_reported_with_its_likely_cause() {
     let good = msh(4, &TET);
