@@ -35,9 +35,9 @@
 use crate::analysis::{Analysis, Load, Step};
 use crate::assembly::{DofMap, ExtraTerms, Pattern, PointField, node_adjacency};
 use crate::error::{FemError, Result};
-use crate::linsolve::{LinearSolver, Structure};
+use crate::linsolve::LinearSolver;
 use crate::model::{Extrapolation, LineSearchMode};
-use crate::newton::{Converged, Failure, IncrementProblem, solve_increment, structure};
+use crate::newton::{Converged, Failure, IncrementProblem, solve_increment};
 use crate::ordering::equation_order;
 use crate::rigid::check_supports;
 
@@ -612,7 +612,7 @@ fn cut_back(
     if control.failed() {
         return Ok(());
     }
-    let search_hint = line_search_hint(&failure, step, line_search_applies(problem, extra));
+    let search_hint = line_search_hint(&failure, step, problem.line_search_applies(extra));
     Err(FemError::NotConverged {
         step: step.name.clone(),
         load_factor: t,
@@ -644,13 +644,7 @@ fn switches_line_search(
     problem.step.line_search == LineSearchMode::Auto
         && !problem.line_search
         && matches!(failure, Failure::Inverted(_))
-        && line_search_applies(problem, extra)
-}
-
-/// Whether the line search applies to `problem`: its residual is an energy gradient (no
-/// multipliers, no follower pressure).
-fn line_search_applies(problem: &IncrementProblem<'_>, extra: &dyn ExtraTerms) -> bool {
-    structure(extra, problem.follower) == Structure::SymmetricDefinite
+        && problem.line_search_applies(extra)
 }
 
 /// [`LINE_SEARCH_HINT`] for a step that fails on an inverted element where the line search

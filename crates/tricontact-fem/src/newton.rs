@@ -194,6 +194,14 @@ pub(crate) fn structure(extra: &dyn ExtraTerms, follower: &[(usize, f64)]) -> St
     }
 }
 
+impl IncrementProblem<'_> {
+    /// Whether a line search applies to this increment: its residual is an energy gradient (the
+    /// tangent's [`structure`] is symmetric definite: no multipliers, no follower pressure).
+    pub(crate) fn line_search_applies(&self, extra: &dyn ExtraTerms) -> bool {
+        structure(extra, self.follower) == Structure::SymmetricDefinite
+    }
+}
+
 /// Solves one increment from the committed `u0`, iterating from `start` (`u0`, or the converged
 /// state of a previous solve of the same increment in an outer loop); the correction test measures
 /// `Δu` from `u0`.
@@ -217,7 +225,7 @@ pub fn solve_increment(
     );
     let mut it = Iterate::new(start, fext_norm.max(SCALE_FRACTION * p.force_scale));
     // Line search where the residual is an energy gradient: the correction being applied.
-    let searching = p.line_search && structure == Structure::SymmetricDefinite;
+    let searching = p.line_search && p.line_search_applies(extra);
     // Small strain without extra or follower terms: the tangent is constant,
     // so the prescribed values are applied directly (the residual then
     // contains `K_fp Δu_p` exactly) and one factorization serves the step.
