@@ -99,6 +99,14 @@ pub struct Group {
     pub nodes: Vec<usize>,
 }
 
+impl Group {
+    /// The group's nodes `a` with `keep[a]` (e.g. the nodes of bodies), in order.
+    #[must_use]
+    pub fn nodes_in(&self, keep: &[bool]) -> Vec<usize> {
+        self.nodes.iter().copied().filter(|&a| keep[a]).collect()
+    }
+}
+
 /// A mesh with its physical groups.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {

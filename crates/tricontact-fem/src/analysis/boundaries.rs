@@ -85,12 +85,7 @@ pub(super) fn resolve(
                 b.group
             )));
         }
-        let nodes: Vec<usize> = g
-            .nodes
-            .iter()
-            .copied()
-            .filter(|&a| active_nodes[a])
-            .collect();
+        let nodes: Vec<usize> = g.nodes_in(active_nodes);
         if nodes.is_empty() && nodes_known {
             problems.push(invalid(format!(
                 "{}boundary '{}': the group has no node of any body",

@@ -138,12 +138,7 @@ fn group_force(g: &Group, f: [f64; 3], bodies: &Bodies<'_>) -> Option<HashMap<us
     } else {
         Vec::new()
     };
-    let nodes: Vec<usize> = g
-        .nodes
-        .iter()
-        .copied()
-        .filter(|&a| bodies.active_nodes[a])
-        .collect();
+    let nodes: Vec<usize> = g.nodes_in(bodies.active_nodes);
     if faces.is_empty() && nodes.is_empty() && bodies.nodes_known {
         return None;
     }

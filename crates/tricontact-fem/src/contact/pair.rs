@@ -458,12 +458,7 @@ fn sides(
             at("slave")
         ));
     }
-    let slaves: Vec<usize> = slave
-        .nodes
-        .iter()
-        .copied()
-        .filter(|&a| in_body[a])
-        .collect();
+    let slaves: Vec<usize> = slave.nodes_in(in_body);
     if slaves.is_empty() {
         problems.push(format!(
             "{}contact '{name}': the slave group has no node of any body",
