@@ -204,20 +204,11 @@ impl NodeFacet {
         self.second_order(0.0, 1.0)
     }
 
-    /// `α ∇P⊗∇P + β ∇²P`, the one formula behind the Hessian (`α = 0, β = 1`), the penalty tangent
-    /// (`α, β = αP`) and the geometric stiffness (`0, λ`). Block `(a, b)` is
-    ///
-    /// ```text
-    /// W ⊗ [(α N_a N_b − β P G_a·G_b) W + β N_b G_a] + β N_a G_b ⊗ W
-    /// ```
-    ///
-    /// Column `(b, s)` of the result is `W_s X_b + β N_b Y_s` with the 12-vectors
-    /// `X_b = [c_ab W + β N_a G_b]_a` (`c_ab = α N_a N_b − β P G_a·G_b`) and `Y_s = [G_a,s W]_a`,
-    /// which keeps the work in short vector loops.
     /// A bound on every entry of [`NodeFacet::second_order`] and of the force `β ∇P`:
     /// `|α| M_N² + 2|β| M_N M_G + 3|β P| M_G² + |β| M_N` with `M_N = max(1, |N_a|)` and
-    /// `M_G` the largest component of any `G_a` (so `|G_a·G_b| ≤ 3 M_G²`). When it is below `1e300` no entry can overflow, which spares callers a
-    /// pass over the 156 outputs; otherwise they check every entry.
+    /// `M_G` the largest component of any `G_a` (so `|G_a·G_b| ≤ 3 M_G²`). When it is below
+    /// `1e300` no entry can overflow, which spares callers a pass over the 156 outputs; otherwise
+    /// they check every entry.
     pub(crate) fn second_order_bound(&self, alpha: f64, beta: f64) -> f64 {
         let mn = self
             .projection
@@ -238,6 +229,16 @@ impl NodeFacet {
         self.second_order_bound(alpha, beta) < 1e300
     }
 
+    /// `α ∇P⊗∇P + β ∇²P`, the one formula behind the Hessian (`α = 0, β = 1`), the penalty tangent
+    /// (`α, β = αP`) and the geometric stiffness (`0, λ`). Block `(a, b)` is
+    ///
+    /// ```text
+    /// W ⊗ [(α N_a N_b − β P G_a·G_b) W + β N_b G_a] + β N_a G_b ⊗ W
+    /// ```
+    ///
+    /// Column `(b, s)` of the result is `W_s X_b + β N_b Y_s` with the 12-vectors
+    /// `X_b = [c_ab W + β N_a G_b]_a` (`c_ab = α N_a N_b − β P G_a·G_b`) and `Y_s = [G_a,s W]_a`,
+    /// which keeps the work in short vector loops.
     #[inline]
     pub(crate) fn second_order(&self, alpha: f64, beta: f64) -> Mat12 {
         let w = self.facet.normal();

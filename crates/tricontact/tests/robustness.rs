@@ -130,6 +130,20 @@ fn zero_distances_are_errors() {
     ));
 }
 
+/// The zero-distance threshold is relative to the larger distance of the two points from the
+/// origin, whatever the unit: a node 10⁻¹³ from a vertex at the origin is a distance, a node
+/// 10⁻¹³ from a vertex at 1 is not.
+#[test]
+fn the_zero_distance_threshold_scales_with_the_coordinates() {
+    let tiny = v(1e-13, 0.0, 0.0);
+    let d = point_vertex(&v(0.0, 0.0, 0.0), &tiny).expect("a distance at any scale");
+    assert_eq!(d.distance, 1e-13);
+    assert!(matches!(
+        point_vertex(&v(1.0, 0.0, 0.0), &(v(1.0, 0.0, 0.0) + tiny)),
+        Err(GeometryError::ZeroDistance { .. })
+    ));
+}
+
 /// Any finite f64, with magnitudes spread over the whole exponent range.
 fn coordinate() -> impl Strategy<Value = f64> {
     prop_oneof![

@@ -8,9 +8,9 @@
 //! ∂²d/∂x_l² = (I − n⊗n)/d = H,   Hessian = [[H, −H], [−H, H]]
 //! ```
 //!
-//! `d` is not differentiable at `d = 0`: a node within `1e-12` (relative to the vertex's distance
-//! from the origin, or absolute scale 1 if that is smaller) of the vertex is a
-//! [`GeometryError::ZeroDistance`].
+//! `d` is not differentiable at `d = 0`: a node within `1e-12 · max(|x_a|, |x_l|)` of the vertex
+//! (the larger distance of the two points from the origin; at least `1e-12 · 1.5·10⁻¹⁵⁴`, the
+//! square root of the smallest normal `f64`) is a [`GeometryError::ZeroDistance`].
 
 use nalgebra::{SMatrix, SVector};
 
