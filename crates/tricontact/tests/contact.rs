@@ -146,6 +146,26 @@ fn a_node_penetrating_one_flank_of_a_valley_is_caught() {
     }
 }
 
+/// The rule's one blind spot, stated in `choice.rs`: below a valley, between the two flanks'
+/// inward normals at the valley line, a penetrating node projects into neither flank. On the
+/// valley `z = |x|/2` (flank normals `(∓1/2, 0, 1)/√1.25`) a node `d` below the right flank at
+/// `x` has its foot on that flank for `x ≥ 0.4 d` only.
+#[test]
+fn below_a_valley_between_the_flank_normals_no_facet_is_chosen() {
+    let (nodes, facets) = ridge(1.0);
+    let d = 0.01;
+    for k in 0..=20 {
+        let x = 0.4 * d * f64::from(k) / 20.0;
+        let node = Vec3::new(x, 2.2, x / 2.0 - d);
+        let gap = choose_on(&nodes, &facets, node);
+        if x < 0.4 * d * (1.0 - 1e-9) {
+            assert_eq!(gap, None, "x = {x}: inside the wedge");
+        } else {
+            assert!(gap.is_some_and(|g| g < 0.0), "x = {x}: {gap:?}");
+        }
+    }
+}
+
 #[test]
 fn assembled_penalty_terms_match_finite_differences() {
     let (mut nodes, facets) = grid(2, 1.0);

@@ -10,7 +10,10 @@
 //! * **Flat surface, shared edge or vertex.** The node projects into every facet sharing the edge
 //!   or vertex (the tolerance absorbs round-off), all give the same `P`, and the lowest index wins:
 //!   the node is neither missed nor counted twice. On the shared edge the shape functions of both
-//!   facets agree, so the force does not depend on the choice.
+//!   facets agree, so the force does not depend on the choice; the tangent's term `P∇²P` (or
+//!   `λ∇²P`) does, through the facet's `G_a`, and jumps where the choice changes facet (a caller
+//!   iterating Newton should keep a node's facet across an edge within a hysteresis, as the
+//!   solver does).
 //! * **Sliding.** Crossing an edge of a flat region, `P` and the shape functions are continuous,
 //!   so gap and force are continuous.
 //! * **Convex edge or corner** (a ridge of the master body). A node inside the body near the ridge
@@ -20,7 +23,12 @@
 //!   passes through the region where it projects into a facet with `P` near zero.
 //! * **Concave edge** (a valley). A node penetrating one flank near the valley projects into that
 //!   flank only (its foot on the other flank's plane lies beyond the valley line), so the
-//!   penetrated facet is chosen; for a node above both flanks either choice has `P > 0`.
+//!   penetrated facet is chosen; for a node above both flanks either choice has `P > 0`. The
+//!   exception is the wedge below the valley line between the flanks' inward normals there (its
+//!   angle is the kink `κ` between the normals; at a penetration `|P|` it is about `|P| tan κ`
+//!   wide): a node in it has its foot beyond the valley line on both flanks' planes and gets
+//!   `None`. A caller that knows the node's previous facet can keep its plane, extended, while
+//!   the node penetrates it (the solver does).
 //!
 //! The rule assumes penetrations small compared with the facet size, as contact enforcement keeps
 //! them.
