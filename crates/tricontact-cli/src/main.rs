@@ -179,17 +179,27 @@ fn resolve(
     (an, hertz, problems)
 }
 
-/// A problem at `[output] folder` when it names an existing file (`run` without `--output` would
-/// fail on it only after the analysis was set up).
+/// A problem at `[output] folder` when it names an existing file, or a path through one (`run`
+/// without `--output` would fail on it only after the analysis was set up).
 fn folder_problem(model: &Model) -> Option<FemError> {
     let dir = model.output_dir();
-    (dir.exists() && !dir.is_dir()).then(|| {
-        FemError::Invalid(vec![format!(
-            "{}output.folder {}: exists and is not a folder",
-            model.source.at("output", 0, "folder"),
-            dir.display()
-        )])
-    })
+    let existing = dir.ancestors().find(|a| a.exists())?;
+    if existing.is_dir() {
+        return None;
+    }
+    let what = if existing == dir {
+        "exists and is not a folder".to_string()
+    } else {
+        format!(
+            "cannot be created: {} is a file, not a folder",
+            existing.display()
+        )
+    };
+    Some(FemError::Invalid(vec![format!(
+        "{}output.folder {}: {what}",
+        model.source.at("output", 0, "folder"),
+        dir.display()
+    )]))
 }
 
 fn set_threads(threads: Option<usize>) -> Result<(), String> {

@@ -871,6 +871,33 @@ fn an_output_folder_that_is_a_file_is_a_model_problem() {
         .output()
         .expect("runs");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // A folder below a file cannot be created: the same problem, at the same line.
+    let below = mesh.join("sub");
+    std::fs::write(
+        &model,
+        src.replace(
+            &format!("folder = {mesh:?}"),
+            &format!("folder = {below:?}"),
+        ),
+    )
+    .expect("write");
+    let expect = format!(
+        "{}:{line}: output.folder {}: cannot be created: {} is a file, not a folder",
+        model.display(),
+        below.display(),
+        mesh.display()
+    );
+    for cmd in ["check", "run"] {
+        let o = bin()
+            .args([cmd.as_ref(), model.as_os_str()])
+            .output()
+            .expect("runs");
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && stderr.contains(&expect),
+            "{cmd}: {stderr}"
+        );
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -194,7 +194,12 @@ impl ResultWriter {
                 dir.display()
             )));
         }
-        std::fs::create_dir_all(dir).map_err(|e| FemError::io(dir, e))?;
+        std::fs::create_dir_all(dir).map_err(|e| {
+            FemError::Output(format!(
+                "cannot create the result folder {}: {e}",
+                dir.display()
+            ))
+        })?;
         remove_stale(dir, stem)?;
         let rigid = rigid_faces(an);
         let cells = an
