@@ -39,6 +39,7 @@ pub mod plots;
 pub mod report;
 pub mod results;
 pub mod rigid;
+pub mod sections;
 pub mod shape;
 pub mod source;
 pub mod structured;

@@ -509,8 +509,9 @@ impl Model {
     /// # Errors
     /// A syntax/schema error with line and column.
     pub fn parse(text: &str, path: &Path) -> Result<Self> {
+        crate::sections::check(text, path)?;
         let mut model: Self = toml::from_str(text).map_err(|e| {
-            let mut message = e.message().trim().replace('\n', " ");
+            let mut message = plain_types(&e.message().trim().replace('\n', " "));
             // The parser's "duplicate key" does not say which: its span covers the key.
             if message == "duplicate key"
                 && let Some(key) = e.span().and_then(|s| text.get(s)).map(str::trim)
@@ -587,6 +588,23 @@ impl Model {
     }
 }
 
+/// The reader's message with Rust's type names (`expected usize`) in the model file's terms.
+fn plain_types(message: &str) -> String {
+    const WHOLE: &str = "a whole number ≥ 0";
+    let mut m = message.to_string();
+    for t in ["usize", "u64", "u32"] {
+        let expected = format!("expected {t}");
+        if m.ends_with(&expected) && m.starts_with("invalid type: floating point") {
+            m = m.replace(
+                &expected,
+                &format!("expected {WHOLE}, without a decimal point"),
+            );
+        }
+        m = m.replace(&expected, &format!("expected {WHOLE}"));
+    }
+    m.replace("expected f64", "expected a number")
+}
+
 /// 1-based line and column of a byte offset.
 #[must_use]
 pub fn line_col(text: &str, offset: usize) -> (usize, usize) {
@@ -630,6 +648,39 @@ pressure = 2.0
 increments = 4
 nlgeom = true
 "#;
+
+    /// Type mistakes are told in the file's terms, not Rust's (`usize`, `f64`).
+    #[test]
+    fn type_mistakes_name_the_kind_of_value_expected() {
+        let cases = [
+            (
+                "increments = 4",
+                "increments = -1",
+                "integer `-1`, expected a whole number ≥ 0",
+            ),
+            (
+                "increments = 4",
+                "increments = 4.0",
+                "floating point `4.0`, expected a whole number ≥ 0, without a decimal point",
+            ),
+            (
+                "increments = 4",
+                "increments = \"x\"",
+                "expected a whole number ≥ 0",
+            ),
+            ("E = 210e3", "E = \"x\"", "string \"x\", expected a number"),
+        ];
+        for (from, to, expect) in cases {
+            let text = GOOD.replace(from, to);
+            let e = Model::parse(&text, Path::new("m.toml"))
+                .expect_err(to)
+                .to_string();
+            assert!(
+                e.contains(expect) && !e.contains("usize") && !e.contains("f64"),
+                "{to}: {e}"
+            );
+        }
+    }
 
     #[test]
     fn parses_with_defaults() {
