@@ -940,3 +940,33 @@ fn an_unreadable_mesh_names_the_model_line() {
         "{stderr}"
     );
 }
+
+/// A model with no `[[step]]` is told so, naming the file, and only that: the loads that name
+/// steps are not reported as naming unknown ones.
+#[test]
+fn a_model_without_steps_names_the_file_once() {
+    let dir = temp_dir("no-steps");
+    let mesh = example().with_file_name("beam.msh");
+    let text = std::fs::read_to_string(example()).expect("model");
+    let (head, tail) = text.split_at(text.find("[[step]]").expect("steps"));
+    let src = format!("{head}{}", &tail[tail.find("[output]").expect("output")..])
+        .replace("\"beam.msh\"", &format!("{mesh:?}"));
+    let model = dir.join("model.toml");
+    std::fs::write(&model, src).expect("write");
+    let o = bin()
+        .args(["check".as_ref(), model.as_os_str()])
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(!o.status.success(), "{stdout}");
+    assert!(
+        stderr.contains(&format!("{}: no [[step]] defined", model.display())),
+        "{stderr}"
+    );
+    assert!(
+        !format!("{stdout}{stderr}").contains("unknown step"),
+        "{stdout}{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

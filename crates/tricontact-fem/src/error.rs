@@ -60,9 +60,12 @@ pub enum FemError {
     Invalid(Vec<String>),
     /// An element has a non-positive Jacobian in the reference configuration.
     #[error(
-        "element {tag} is inverted: Jacobian determinant {det_j:.3e} < 0 at an integration point"
+        "mesh {}: element {tag} is inverted: Jacobian determinant {det_j:.3e} < 0 at an integration point",
+        mesh.display()
     )]
     InvertedElement {
+        /// The mesh file.
+        mesh: PathBuf,
         /// Internal element index.
         element: usize,
         /// Gmsh element tag.
@@ -72,9 +75,12 @@ pub enum FemError {
     },
     /// An element has (numerically) zero volume.
     #[error(
-        "element {tag} has zero volume (Jacobian determinant {det_j:.3e} relative to its size)"
+        "mesh {}: element {tag} has zero volume (Jacobian determinant {det_j:.3e} relative to its size)",
+        mesh.display()
     )]
     ZeroVolume {
+        /// The mesh file.
+        mesh: PathBuf,
         /// Internal element index.
         element: usize,
         /// Gmsh element tag.

@@ -108,6 +108,17 @@ impl SourceMap {
         self.at(table, index, spelt.copied().unwrap_or(""))
     }
 
+    /// `"model.toml: "`, the prefix of a message about the whole file (`""` for a model built in
+    /// code).
+    #[must_use]
+    pub fn file(&self) -> String {
+        if self.path.as_os_str().is_empty() {
+            String::new()
+        } else {
+            format!("{}: ", self.path.display())
+        }
+    }
+
     /// `"model.toml:12: "` for a place (see [`SourceMap::line`]), `""` when it has no line: the
     /// prefix of a message about it.
     #[must_use]

@@ -189,7 +189,8 @@ fn inverted_element_is_reported() {
 /// A volume element that names a node twice (a corner lost) is refused by the reader and by
 /// [`Mesh::check`], naming the element and the node by their Gmsh tags: a hexahedron collapsed
 /// that way kept positive Jacobians and split the mesh without a word. The message of an
-/// inverted element names it by its Gmsh tag alone (it gave the internal index as well).
+/// inverted element names the mesh file and the element by its Gmsh tag alone (it gave the
+/// internal index as well).
 #[test]
 fn an_element_naming_a_node_twice_is_refused() {
     let hex: Vec<[f64; 3]> = (0..8)
@@ -227,8 +228,9 @@ fn an_element_naming_a_node_twice_is_refused() {
     );
     let e = load_analysis(&p).expect_err("inverted");
     assert!(
-        e.to_string()
-            .starts_with("element 1 is inverted: Jacobian determinant"),
+        e.to_string().starts_with("mesh ")
+            && e.to_string()
+                .contains("/m.msh: element 1 is inverted: Jacobian determinant"),
         "{e}"
     );
 }

@@ -6,6 +6,7 @@
 //! element, the rest counted.
 
 use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
 
 use super::{BodyElement, MAX_MODULUS, invalid, unknown};
 use crate::element::jacobian_dets;
@@ -82,7 +83,7 @@ pub(super) fn resolve(
     let mut body = Vec::new();
     let mut owner: Vec<Option<usize>> = vec![None; mesh.elements.len()];
     if model.bodies.is_empty() {
-        problems.push(invalid("no [[body]] defined".into()));
+        problems.push(invalid(format!("{}no [[body]] defined", src.file())));
     }
     // Elements claimed by two bodies: (first body, second body) -> (count, first tag).
     let mut shared: BTreeMap<(usize, usize), (usize, u64)> = BTreeMap::new();
@@ -174,6 +175,7 @@ pub(super) fn rules(mesh: &Mesh, body: &[BodyElement]) -> Vec<(ElementKind, Vec<
 
 /// Zero-volume and inverted elements of `body` (see the module documentation).
 pub(super) fn check_quality(
+    path: &Path,
     mesh: &Mesh,
     body: &[BodyElement],
     rules: &[(ElementKind, Vec<QPoint>)],
@@ -202,12 +204,14 @@ pub(super) fn check_quality(
         let min_det = dets.iter().fold(f64::INFINITY, |m, &d| m.min(d));
         let problem = if min_abs <= 1e-8 * h.powi(3) {
             Some(FemError::ZeroVolume {
+                mesh: path.to_path_buf(),
                 element: bi,
                 tag: el.tag,
                 det_j: min_abs / h.powi(3).max(f64::MIN_POSITIVE),
             })
         } else if min_det < 0.0 {
             Some(FemError::InvertedElement {
+                mesh: path.to_path_buf(),
                 element: bi,
                 tag: el.tag,
                 det_j: min_det,

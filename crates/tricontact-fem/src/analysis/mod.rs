@@ -277,7 +277,7 @@ impl Analysis {
         let (body, bodies_ok) = bodies::resolve(model, &mesh, &by_name, p);
         let mut active_nodes = bodies::nodes(&mesh, &body);
         let rules = bodies::rules(&mesh, &body);
-        bodies::check_quality(&mesh, &body, &rules, p);
+        bodies::check_quality(&model.mesh_path(), &mesh, &body, &rules, p);
         // Contact pairs may move adjusted slave nodes; rigid master nodes become active.
         let before_contacts = p.len();
         let (contacts, rigid) = contacts::resolve(

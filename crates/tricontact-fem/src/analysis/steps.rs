@@ -8,7 +8,7 @@ use crate::model::Model;
 pub(super) fn resolve(model: &Model, problems: &mut Vec<FemError>) -> Vec<Step> {
     let src = &model.source;
     if model.steps.is_empty() {
-        problems.push(invalid("no [[step]] defined".into()));
+        problems.push(invalid(format!("{}no [[step]] defined", src.file())));
     }
     let steps: Vec<Step> = model
         .steps
@@ -90,7 +90,8 @@ pub(super) fn mask(
                 if names[..i].contains(n) {
                     problems.push(invalid(format!("{what}: step '{n}' is listed twice")));
                 }
-                if !steps.iter().any(|s| &s.name == n) {
+                // With no step at all, that is the one problem to report.
+                if !steps.is_empty() && !steps.iter().any(|s| &s.name == n) {
                     problems.push(invalid(format!(
                         "{what}: unknown step '{n}' (steps: {})",
                         steps
