@@ -970,3 +970,48 @@ fn a_model_without_steps_names_the_file_once() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A rigid flat held along its normal only: the error names a node of the rigid surface, and so
+/// does the note on rigid-body modes (it called the node's part a body part, which has none).
+#[test]
+fn an_under_held_rigid_surface_is_named_as_such() {
+    let dir = temp_dir("rigid-held");
+    let ex = examples_dir().join("hertz");
+    let src = std::fs::read_to_string(ex.join("penalty.toml"))
+        .expect("model")
+        .replace(
+            "\"hertz-fine.msh\"",
+            &format!("{:?}", ex.join("hertz-coarse.msh")),
+        );
+    let at = src.find("group = \"flat\"").expect("flat");
+    let fix = at + src[at..].find("fix = [\"x\", \"y\", \"z\"]").expect("fix");
+    let src = format!(
+        "{}fix = [\"z\"]{}",
+        &src[..fix],
+        &src[fix + "fix = [\"x\", \"y\", \"z\"]".len()..]
+    );
+    let model = dir.join("model.toml");
+    std::fs::write(&model, src).expect("write");
+    let o = bin()
+        .args(["check".as_ref(), model.as_os_str()])
+        .output()
+        .expect("runs");
+    let all = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(!o.status.success(), "{all}");
+    assert!(
+        all.contains(
+            "of a rigid contact surface (no volume element) must have x, y and z prescribed"
+        ),
+        "{all}"
+    );
+    assert!(
+        all.contains("of a rigid contact surface (no volume element) has 2 unconstrained"),
+        "{all}"
+    );
+    assert!(!all.contains("body part"), "{all}");
+    std::fs::remove_dir_all(&dir).ok();
+}

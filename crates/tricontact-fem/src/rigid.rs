@@ -56,8 +56,12 @@ pub fn check_supports_with(
         "check_supports: one prescribed flag per nodal DOF (3 per node)"
     );
     let mut parent: Vec<usize> = (0..n).collect();
+    let mut in_element = vec![false; n];
     for be in &an.body {
         let nodes = &an.mesh.elements[be.element].nodes;
+        for &a in nodes {
+            in_element[a] = true;
+        }
         let r0 = find(&mut parent, nodes[0]);
         for &a in &nodes[1..] {
             let r = find(&mut parent, a);
@@ -111,9 +115,15 @@ pub fn check_supports_with(
         }
         let free = nullity(g).saturating_sub(nullity(g_all));
         if free > 0 {
+            let tag = an.mesh.node_tags[nodes[0]];
+            // A node of no element is one of a rigid contact surface's, a part of its own.
+            let part = if in_element[nodes[0]] {
+                format!("the body part containing node {tag}")
+            } else {
+                format!("node {tag} of a rigid contact surface (no volume element)")
+            };
             return Err(format!(
-                "the body part containing node {} has {free} unconstrained rigid-body mode(s); add supports",
-                an.mesh.node_tags[nodes[0]]
+                "{part} has {free} unconstrained rigid-body mode(s); add supports"
             ));
         }
     }
