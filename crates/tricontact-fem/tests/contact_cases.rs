@@ -511,10 +511,21 @@ fn adjust_removes_small_initial_penetrations_and_reports_deeper_ones() {
     }
     let without = format!("{base}{}", contact("penalty", ""));
     let model = Model::parse(&without, std::path::Path::new("m.toml")).expect("model");
+    let kept = mesh.clone();
     let an = Analysis::new(&model, mesh).expect("analysis");
     let r = an.contacts[0].report.join(" ");
     assert!(
-        r.contains("4 slave nodes initially penetrate") && r.contains("1.000e-3"),
+        r.contains("4 slave nodes initially penetrate the master (no adjust given)")
+            && r.contains("1.000e-3"),
+        "{r}"
+    );
+    // Deeper than a given adjust: the note says so.
+    let short = format!("{base}{}", contact("penalty", "adjust = 0.0005"));
+    let model = Model::parse(&short, std::path::Path::new("m.toml")).expect("model");
+    let an = Analysis::new(&model, kept).expect("analysis");
+    let r = an.contacts[0].report.join(" ");
+    assert!(
+        r.contains("penetrate the master deeper than adjust = 5e-4"),
         "{r}"
     );
 }

@@ -788,8 +788,12 @@ fn initial_penetrations(
         ));
     }
     if deep > 0 {
+        let beyond = match def.adjust {
+            Some(a) => format!("deeper than adjust = {a:e}"),
+            None => "(no adjust given)".to_string(),
+        };
         report.push(format!(
-            "contact '{name}': {deep} slave nodes initially penetrate beyond adjust, largest {largest:.3e} at node {} ({:.4e}, {:.4e}, {:.4e})",
+            "contact '{name}': {deep} slave nodes initially penetrate the master {beyond}, largest {largest:.3e} at node {} ({:.4e}, {:.4e}, {:.4e})",
             mesh.node_tags[worst], mesh.nodes[worst][0], mesh.nodes[worst][1], mesh.nodes[worst][2]
         ));
     }
