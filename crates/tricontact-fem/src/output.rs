@@ -182,6 +182,19 @@ impl Snapshot {
     }
 }
 
+/// An extra column's value: a whole number (a count of closed nodes, a force of exactly zero)
+/// as an integer, `36` rather than `3.6e1`; any other value in exponent form, exact.
+fn extra_cell(v: f64) -> String {
+    // Below 2⁵³ every whole f64 is an exact i64.
+    if v.fract() == 0.0 && v.abs() < 9_007_199_254_740_992.0 {
+        #[allow(clippy::cast_possible_truncation)]
+        let n = v as i64;
+        n.to_string()
+    } else {
+        format!("{v:e}")
+    }
+}
+
 impl ResultWriter {
     /// Creates the folder and the history header.
     ///
@@ -329,7 +342,7 @@ impl ResultWriter {
             let _ = write!(self.history, ",{:e},{:e},{:e}", r[0], r[1], r[2]);
         }
         for (_, v) in info.history {
-            let _ = write!(self.history, ",{v:e}");
+            let _ = write!(self.history, ",{}", extra_cell(*v));
         }
         self.history.push('\n');
         if an.output.history {

@@ -695,6 +695,14 @@ fn contact_fields_and_history_columns_are_written() {
     }
     let row: Vec<&str> = csv.lines().nth(1).expect("row").split(',').collect();
     assert_eq!(row.len(), header.split(',').count());
+    // The count of closed nodes is written as a whole number (it read `9e0`).
+    let active = header
+        .split(',')
+        .position(|c| c.ends_with("_active"))
+        .expect("active column");
+    let closed: usize = row[active].parse().expect("a whole number");
+    assert_eq!(closed as f64, history(&terms, "_active"));
+    assert!(closed > 0, "{}", row[active]);
     let vtu = std::fs::read_to_string(dir.join("m_001_0001.vtu")).expect("vtu");
     // Numbers that name something (a status, a face tag, a material) are integer arrays, so
     // that ParaView shows them as such; the rest are floating point.
