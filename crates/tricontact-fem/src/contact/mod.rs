@@ -681,8 +681,8 @@ impl ExtraTerms for ContactTerms {
         let x = self.positions(u);
         let n_nodal = 3 * self.reference.len();
         let mut force = vec![0.0; n_nodal];
-        let (mut active_count, mut changed, mut frozen, mut moved) =
-            (0usize, 0usize, 0usize, 0usize);
+        let (mut active_count, mut changed, mut frozen, mut held, mut moved) =
+            (0usize, 0usize, 0usize, 0usize, 0usize);
         for p in 0..self.pairs.len() {
             let (method, alpha, small) = {
                 let pr = &self.pairs[p];
@@ -719,7 +719,7 @@ impl ExtraTerms for ContactTerms {
                         }
                     }
                     if st.held {
-                        frozen += 1;
+                        held += 1;
                     }
                     if st.active {
                         active_count += 1;
@@ -732,12 +732,20 @@ impl ExtraTerms for ContactTerms {
         }
         self.trial_force = force;
         // A model without contact pairs has nothing to say per iteration.
-        self.note = (!self.pairs.is_empty()).then(|| if frozen > 0 {
-            format!(
-                "contact: {active_count} closed, {changed} changed, {moved} changed facet, {frozen} frozen (cycling)"
-            )
-        } else {
-            format!("contact: {active_count} closed, {changed} changed, {moved} changed facet")
+        // Nodes that cycled: facets frozen (between flanks) and statuses held closed, apart.
+        self.note = (!self.pairs.is_empty()).then(|| {
+            let mut note =
+                format!("contact: {active_count} closed, {changed} changed, {moved} changed facet");
+            if frozen > 0 {
+                note += &format!(", {frozen} facet(s) frozen");
+            }
+            if held > 0 {
+                note += &format!(", {held} held closed");
+            }
+            if frozen + held > 0 {
+                note += " (cycling)";
+            }
+            note
         });
         Ok(())
     }
