@@ -1118,3 +1118,31 @@ fn quadratic_contact_surfaces_carry_the_uniform_pressure() {
         assert!((area - 1.0).abs() < 1e-9, "{method}: area {area}");
     }
 }
+
+/// A pair between two faces of one block (a group mistyped: `upper_zmax` for `lower_zmax`) is
+/// noted as self-contact; the pair between the two blocks is not.
+#[test]
+fn a_pair_on_one_connected_part_is_noted_as_self_contact() {
+    let mesh = small_blocks(ElementKind::Hex8);
+    let base = format!("{MAT}[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n");
+    let step = "[[step]]\n";
+    let between = common::analysis(
+        mesh.clone(),
+        &format!("{base}{}{step}", contact("penalty", "")),
+    );
+    assert!(
+        !between.contacts[0]
+            .report
+            .join(" ")
+            .contains("self-contact"),
+        "{:?}",
+        between.contacts[0].report
+    );
+    let one = contact("penalty", "").replace("lower_zmax", "upper_zmax");
+    let within = common::analysis(mesh, &format!("{base}{one}{step}"));
+    let r = within.contacts[0].report.join(" ");
+    assert!(
+        r.contains("slave 'upper_zmin' and master 'upper_zmax' lie on one connected part of the mesh (self-contact)"),
+        "{r}"
+    );
+}

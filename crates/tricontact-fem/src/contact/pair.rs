@@ -356,6 +356,17 @@ pub fn resolve(
         (default_penalty, e, h_mean),
         &name,
     ));
+    if one_part(
+        mesh.nodes.len(),
+        &bodies.elements,
+        &sides.slaves,
+        surface.facets(),
+    ) {
+        report.push(format!(
+            "contact '{name}': slave '{}' and master '{}' lie on one connected part of the mesh (self-contact); if the pair is meant between two bodies, check the group names",
+            def.slave, def.master
+        ));
+    }
     let mut passes = vec![pass(
         mesh,
         Some(sides.slaves),
@@ -389,6 +400,38 @@ pub fn resolve(
         passes,
         report,
     })
+}
+
+/// `true` when the slave nodes and the master facets' nodes all lie on one part of the mesh
+/// (nodes linked through body elements): a self-contact pair, or two groups of one body named by
+/// mistake. A master of no body element (a rigid tool) is a part of its own.
+fn one_part(nodes: usize, elements: &[&Element], slaves: &[usize], facets: &[[u32; 3]]) -> bool {
+    let mut parent: Vec<usize> = (0..nodes).collect();
+    fn root(parent: &mut [usize], mut a: usize) -> usize {
+        while parent[a] != a {
+            parent[a] = parent[parent[a]];
+            a = parent[a];
+        }
+        a
+    }
+    let mut in_element = vec![false; nodes];
+    for e in elements {
+        let r = root(&mut parent, e.nodes[0]);
+        for &a in &e.nodes {
+            in_element[a] = true;
+            let ra = root(&mut parent, a);
+            parent[ra] = r;
+        }
+    }
+    let mut all = slaves
+        .iter()
+        .copied()
+        .chain(facets.iter().flatten().map(|&a| a as usize));
+    let Some(first) = all.next() else {
+        return false;
+    };
+    let part = root(&mut parent, first);
+    in_element[first] && all.all(|a| in_element[a] && root(&mut parent, a) == part)
 }
 
 /// The two sides of a pair as the mesh gives them: the master group, its oriented facets and
