@@ -1146,3 +1146,45 @@ fn a_pair_on_one_connected_part_is_noted_as_self_contact() {
         "{r}"
     );
 }
+
+/// A soft block pressed on a stiffer one of the same size, their edges flush, with multipliers:
+/// the soft block spreads (Poisson), and its edge nodes leave the master's projection region at
+/// the gap `P = 0` the multipliers hold (up to round-off). They keep their facet's plane while
+/// they touch it within the pair's tolerance; with `P ≤ 0` required, a node at `P = +10⁻¹⁷` lost
+/// its constraint, and Newton diverged at every increment down to 1/32 of the load.
+#[test]
+fn multiplier_nodes_spreading_past_the_master_edge_keep_their_facet() {
+    let l = box_mesh([1.0, 1.0, 0.5], [4, 4, 1], ElementKind::Hex8);
+    let u = box_mesh([1.0, 1.0, 0.5], [4, 4, 1], ElementKind::Hex8);
+    let mesh = tricontact_fem::structured::stack(&l, &u, [0.0, 0.0, 0.5]);
+    let mut text = String::new();
+    for (name, e) in [("lo", 10.0), ("up", 1.0)] {
+        text +=
+            &format!("[[material]]\nname = \"{name}\"\ntype = \"neo_hooke\"\nE = {e}\nnu = 0.3\n");
+    }
+    text += "[[body]]\ngroup = \"lower_solid\"\nmaterial = \"lo\"\n";
+    text += "[[body]]\ngroup = \"upper_solid\"\nmaterial = \"up\"\n";
+    for (g, c) in [
+        ("lower_zmin", "z"),
+        ("lower_xmin", "x"),
+        ("lower_ymin", "y"),
+        ("upper_xmin", "x"),
+        ("upper_ymin", "y"),
+    ] {
+        text += &format!("[[boundary]]\ngroup = \"{g}\"\nfix = [\"{c}\"]\n");
+    }
+    text += "[[load]]\ngroup = \"upper_zmax\"\npressure = 0.01\n";
+    text += &contact("multiplier", "");
+    text += "[[step]]\nincrements = 2\nnlgeom = true\n";
+    let an = common::analysis(mesh, &text);
+    let (terms, records, _) = common::solve_contact(&an);
+    assert!(records.len() == 2 && records[1].load_factor == 1.0);
+    let pass = &an.contacts[0].passes[0];
+    assert_eq!(history(&terms, "_active"), pass.slaves.len() as f64);
+    // Uniform pressure (the patch test), within half a per cent.
+    let (lo, hi) = (
+        history(&terms, "_min_pressure"),
+        history(&terms, "_max_pressure"),
+    );
+    assert!(lo > 0.995e-2 && hi < 1.005e-2, "pressure {lo} … {hi}");
+}

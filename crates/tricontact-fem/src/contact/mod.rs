@@ -54,7 +54,9 @@
 //!   iterations and 0 → 1 cutback; every example file unchanged. Thresholds of 0.25 and 0.5
 //!   instead of `LOST_TOLERANCE` lost the 20 % augmented run again. A node in no facet's
 //!   projection region keeps its previous facet while its foot is within [`LOST_TOLERANCE`] of it
-//!   and it penetrates. Measured and not kept: a second penalty term for a node behind the
+//!   and it touches it (`P` at most the pair's tolerance: with `P ≤ 0` required, a multiplier
+//!   node held at `P = 0` lost its facet to round-off as a soft block spread past the master's
+//!   edge, and Newton diverged; `tests/contact_cases.rs`). Measured and not kept: a second penalty term for a node behind the
 //!   plane of a facet across a concave edge of its chosen facet, the foot within
 //!   [`LOST_TOLERANCE`] of it (near a concave edge the body is the union of the two flanks'
 //!   half-spaces, so keeping out of it takes both constraints), for kinks of at least 0°, 5°,
@@ -271,11 +273,14 @@ impl ContactTerms {
             let Some((f, pair)) =
                 choose_facet(&pass.surface, bvh, x, u32::try_from(s).ok()?, pass.radius)
             else {
-                // In no facet's projection region (below a valley): the previous facet's plane
-                // while the foot stays within LOST_TOLERANCE of it.
+                // In no facet's projection region (below a valley, or just past the master's
+                // edge): the previous facet's plane while the foot stays within LOST_TOLERANCE of
+                // it and the node touches it, within the pair's tolerance (a multiplier holds
+                // `P = 0` up to round-off, which may be positive).
+                let tolerance = self.pairs[p].tolerance;
                 return previous
                     .filter(|(_, _, pair)| {
-                        pair.projection.is_inside(LOST_TOLERANCE) && pair.gap() <= 0.0
+                        pair.projection.is_inside(LOST_TOLERANCE) && pair.gap() <= tolerance
                     })
                     .map(|(f, nodes, pair)| (f, nodes, Gap::Finite(pair)));
             };
