@@ -104,10 +104,15 @@ fn contact_block_leaves_no_node_inside_the_base() {
         let pair = an.contacts[0].name.clone();
         let (summary, rows) = contact_history(&an);
         assert_eq!(summary.cutbacks, 0, "{extrapolation:?}");
+        // The multipliers hold every node on its facet's plane (10⁻¹² h); a node whose facet
+        // is frozen stays on that plane, extended up to 0.1 beyond the facet, and there lies
+        // behind the next flank of the dish the press makes in the base, by up to 5·10⁻⁴ h
+        // (measured by `contact::flank` and counted as penetration). The nodes left open inside
+        // the base that this test was written for were 0.14 h deep.
         for (t, row) in &rows {
             let pen = column(row, &format!("{pair}_max_penetration"));
             assert!(
-                pen <= 1e-8 * h,
+                pen <= 1e-3 * h,
                 "{extrapolation:?}, t = {t}: penetration {pen}"
             );
         }
@@ -291,8 +296,10 @@ fn contact_block_in_other_units_gives_the_same_forces() {
         (f_m - f_mm).abs() <= 1e-6 * f_mm,
         "{f_mm} N against {f_m} N"
     );
+    // The largest penetration (a node's depth behind the next flank of the dish, 1.5·10⁻⁴ mm)
+    // is a length of the model: it scales with the unit.
     assert!(
-        pen_m <= 1e-3 * pen_mm.max(1e-9),
+        (pen_m - 1e-3 * pen_mm).abs() <= 1e-6 * 1e-3 * pen_mm,
         "{pen_mm} mm against {pen_m} m"
     );
     assert!(

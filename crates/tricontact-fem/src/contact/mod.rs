@@ -71,6 +71,7 @@
 //!   convergence and restored on a cutback.
 
 pub mod augmented;
+pub mod flank;
 pub mod gap;
 pub mod multiplier;
 pub mod output;
@@ -349,6 +350,29 @@ impl ContactTerms {
                             pair.name, st.lambda
                         ));
                     }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+impl ContactTerms {
+    /// Each slave node's depth behind a facet across a concave edge of its facet
+    /// ([`flank::flank_penetration`]), for the reports.
+    fn measure_flanks(&mut self, u: &[f64]) -> Result<(), String> {
+        if self.pairs.is_empty() {
+            return Ok(());
+        }
+        let x = self.positions(u);
+        for (p, pair) in self.pairs.iter().enumerate() {
+            for (q, pass) in pair.passes.iter().enumerate() {
+                let bvh = Bvh::build(&pass.surface, &x, pass.radius).map_err(|e| e.to_string())?;
+                for (j, st) in self.trial[p][q].iter_mut().enumerate() {
+                    st.flank = st.facet.map_or(0.0, |f| {
+                        let node = (pass.slaves[j], f);
+                        flank::flank_penetration(&pass.surface, &bvh, &x, node, pass.radius)
+                    });
                 }
             }
         }
@@ -787,6 +811,7 @@ impl ExtraTerms for ContactTerms {
     fn after_converged(&mut self, u: &[f64]) -> Result<bool, String> {
         self.check_held_nodes()?;
         self.check_crossings(u)?;
+        self.measure_flanks(u)?;
         let mut done = true;
         self.outer = None;
         for (p, pair) in self.pairs.iter().enumerate() {

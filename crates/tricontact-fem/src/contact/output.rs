@@ -90,7 +90,7 @@ impl ContactTerms {
                 for (j, st) in self.committed[p][q].iter().enumerate() {
                     force -= st.lambda;
                     if st.facet.is_some() {
-                        pen = pen.max(-st.gap);
+                        pen = pen.max(-st.gap).max(st.flank);
                     }
                     if st.active {
                         active += 1;

@@ -1,0 +1,147 @@
+//! Penetration of the flank across a concave edge: what one constraint per node leaves unheld.
+//!
+//! A slave node is constrained against one facet `F` (its plane `P_F`). Where `F` meets a
+//! neighbouring facet `G` at a concave edge or corner (a valley, the floor and wall of a corner),
+//! the master body is the union of the two half-spaces behind `F` and `G`, and a node held on
+//! `F`'s plane may still lie behind `G`, with `P_G < 0`, its foot in `G` or near it (within
+//! [`LOST_TOLERANCE`], as for a node that left its facet: in a corner a node can be behind both
+//! flanks and project into neither). This module measures that depth, `−P_G`, for the reports
+//! (`_max_penetration`, the run's summary); it enforces nothing (a second constraint per node at
+//! concave kinks was measured and not kept: see `contact/mod.rs`).
+//!
+//! The candidates `G` are the facets within the search radius of the node (the two flanks need
+//! not share nodes: a wall meshed apart from its floor). `F` and `G` are taken as concave when
+//! each has a corner not shared with the other in front of the other's plane by more than
+//! `10⁻⁹` of `F`'s longest edge: on a flat or convex surface `G` is never counted, so a node
+//! inside the body near a ridge, which projects into both flanks, reports only its constrained
+//! gap, and a node outside below a thin plate is not taken as behind the plate's far side.
+
+use super::LOST_TOLERANCE;
+use tricontact::search::{Bvh, Query, Surface};
+use tricontact::{NodeFacet, Vec3};
+
+/// The largest `−P_G` over the facets `G` within `radius` of node `s`, concave to `facet`, that
+/// the node lies behind with its foot within [`LOST_TOLERANCE`] of `G`, at positions `x` (`bvh`
+/// built on them); `0` when there is none.
+#[must_use]
+pub fn flank_penetration(
+    surface: &Surface,
+    bvh: &Bvh,
+    x: &[Vec3],
+    (s, facet): (usize, u32),
+    radius: f64,
+) -> f64 {
+    let corners = |f: u32| surface.facets()[f as usize];
+    let f_nodes = corners(facet);
+    let Ok(f_pair) = NodeFacet::new(
+        x[f_nodes[0] as usize],
+        x[f_nodes[1] as usize],
+        x[f_nodes[2] as usize],
+        x[s],
+    ) else {
+        return 0.0;
+    };
+    let margin = 1e-9 * f_pair.facet.size();
+    let mut deepest = 0.0f64;
+    let query = Query {
+        point: x[s],
+        exclude: u32::try_from(s).ok(),
+    };
+    for hit in bvh.within(surface, &query, radius) {
+        let g = hit.facet;
+        let g_nodes = corners(g);
+        if g == facet {
+            continue;
+        }
+        let Ok(g_pair) = NodeFacet::new(
+            x[g_nodes[0] as usize],
+            x[g_nodes[1] as usize],
+            x[g_nodes[2] as usize],
+            x[s],
+        ) else {
+            continue;
+        };
+        if !(g_pair.gap() < 0.0 && g_pair.projection.is_inside(LOST_TOLERANCE)) {
+            continue;
+        }
+        let rises = |pair: &NodeFacet, own: &[u32; 3], other: &[u32; 3]| {
+            other.iter().filter(|a| !own.contains(a)).any(|&a| {
+                (x[a as usize] - pair.facet.nodes()[0]).dot(&pair.facet.normal()) > margin
+            })
+        };
+        if rises(&f_pair, &f_nodes, &g_nodes) && rises(&g_pair, &g_nodes, &f_nodes) {
+            deepest = deepest.max(-g_pair.gap());
+        }
+    }
+    deepest
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two strips of two facets meeting at `x = 0`, `z = sign · |x| / 2` (a valley for `+1`, a
+    /// ridge for `−1`, flat for `0`), normals up; facets 0–1 on the left, 2–3 on the right.
+    fn profile(sign: f64) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        let mut x = Vec::new();
+        for y in [0.0, 1.0] {
+            for xx in [-1.0f64, 0.0, 1.0] {
+                x.push(Vec3::new(xx, y, sign * xx.abs() / 2.0));
+            }
+        }
+        let facets = vec![[0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4]];
+        (x, facets)
+    }
+
+    /// The depth of `node`, held on facet `f`, behind another facet of `facets`.
+    fn depth(mut x: Vec<Vec3>, facets: Vec<[u32; 3]>, node: Vec3, f: u32) -> f64 {
+        x.push(node);
+        let s = x.len() - 1;
+        let surface = Surface::new(facets, x.len()).expect("surface");
+        let bvh = Bvh::build(&surface, &x, 1.0).expect("tree");
+        flank_penetration(&surface, &bvh, &x, (s, f), 1.0)
+    }
+
+    #[test]
+    fn a_node_held_on_a_flank_past_a_valley_is_behind_the_other() {
+        // On the left flank's plane z = −x/2, extended 0.05 past the valley line.
+        let (x, facets) = profile(1.0);
+        let d = depth(x, facets, Vec3::new(0.05, 0.5, -0.025), 0);
+        let expected = 0.05 / 1.25f64.sqrt();
+        assert!((d - expected).abs() < 1e-12, "{d} against {expected}");
+        // On its own side of the valley line a node on the flank is in front of the other.
+        let (x, facets) = profile(1.0);
+        assert_eq!(depth(x, facets, Vec3::new(-0.05, 0.5, 0.025), 0), 0.0);
+    }
+
+    #[test]
+    fn ridges_and_flat_surfaces_report_nothing() {
+        // Inside near a ridge, on the left flank's plane: behind the right flank's plane too,
+        // but the edge is convex.
+        let (x, facets) = profile(-1.0);
+        assert_eq!(depth(x, facets, Vec3::new(-0.05, 0.5, -0.025), 0), 0.0);
+        let (x, facets) = profile(0.0);
+        assert_eq!(depth(x, facets, Vec3::new(0.3, 0.5, -0.01), 2), 0.0);
+    }
+
+    /// A floor and a wall meshed apart (no shared node), as a corner: a node held on the floor's
+    /// plane, 0.01 into the wall and 0.02 below the floor, projects into neither (its foot on
+    /// the wall is 0.02 below it, within the tolerance) and is 0.01 behind the wall.
+    #[test]
+    fn a_corner_of_separate_pieces_is_seen() {
+        let x = vec![
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::new(0.0, 1.0, 1.0),
+            Vec3::new(0.0, 0.0, 1.0),
+        ];
+        // Floor normal +z; wall (nodes 4–7, apart from the floor's) normal +x.
+        let facets = vec![[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]];
+        let d = depth(x, facets, Vec3::new(-0.01, 0.5, -0.02), 0);
+        assert!((d - 0.01).abs() < 1e-12, "{d}");
+    }
+}
