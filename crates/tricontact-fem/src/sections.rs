@@ -109,8 +109,10 @@ mod tests {
 
     #[test]
     fn well_formed_sections_pass() {
-        let text = "[mesh]\nfile = \"a.msh\"\n[[step]]\nname = \"a\"\n[[step]]\nname = \"b\"\n\
-                    [output]\nfolder = \"r\"\nbody = [{ group = \"g\", material = \"m\" }]\n";
+        // A top-level array of inline tables is a list of tables too (before any header, so
+        // that it is not read as a key of the table above it).
+        let text = "body = [{ group = \"g\", material = \"m\" }]\n[mesh]\nfile = \"a.msh\"\n\
+                    [[step]]\nname = \"a\"\n[[step]]\nname = \"b\"\n[output]\nfolder = \"r\"\n";
         assert_eq!(problem(text), None);
         // Not TOML, or a section this check does not know: left to the typed reading.
         assert_eq!(problem("[mesh\n"), None);

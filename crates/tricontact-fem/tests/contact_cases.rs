@@ -992,10 +992,7 @@ fn a_frozen_facet_is_left_when_the_node_slides_off_it() {
     );
     let pen = history(&terms, "_max_penetration");
     let h = an.contacts[0].facet_size;
-    assert!(
-        pen >= gap && pen <= 1e-3 * h,
-        "penetration {pen:e}, h = {h:e}"
-    );
+    assert!(pen <= 1e-3 * h, "penetration {pen:e}, h = {h:e}");
 }
 
 /// A degenerate master face is named by its Gmsh tag and node tag, not by internal indices, at

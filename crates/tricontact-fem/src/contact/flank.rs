@@ -9,18 +9,21 @@
 //! (`_max_penetration`, the run's summary); it enforces nothing (a second constraint per node at
 //! concave kinks was measured and not kept: see `contact/mod.rs`).
 //!
-//! The candidates `G` are the facets within the search radius of the node (the two flanks need
-//! not share nodes: a wall meshed apart from its floor). `F` and `G` are taken as concave when
-//! each has a corner not shared with the other in front of the other's plane by more than
-//! `10⁻⁹` of `F`'s longest edge: on a flat or convex surface `G` is never counted, so a node
-//! inside the body near a ridge, which projects into both flanks, reports only its constrained
-//! gap, and a node outside below a thin plate is not taken as behind the plate's far side.
+//! The candidates `G` are the facets near the node (the two flanks need not share nodes: a wall
+//! meshed apart from its floor), within twice `F`'s longest edge plus the node's gap. `F` and
+//! `G` are taken as concave when the corners of each that the other does not share all lie in
+//! front of the other's plane, at least one by more than `10⁻⁹` of `F`'s longest edge (so every
+//! point of each is in front of the other): on a flat, convex or saddle-shaped surface `G` is
+//! never counted, so a node inside the body near a ridge, which projects into both flanks,
+//! reports only its constrained gap, and a node outside below a thin plate is not taken as
+//! behind the plate's far side.
 
 use super::LOST_TOLERANCE;
 use tricontact::search::{Bvh, Query, Surface};
 use tricontact::{NodeFacet, Vec3};
 
-/// The largest `−P_G` over the facets `G` within `radius` of node `s`, concave to `facet`, that
+/// The largest `−P_G` over the facets `G` near node `s` (within twice `facet`'s size plus the
+/// node's gap, and within `radius`), concave to `facet`, that
 /// the node lies behind with its foot within [`LOST_TOLERANCE`] of `G`, at positions `x` (`bvh`
 /// built on them); `0` when there is none.
 #[must_use]
@@ -42,12 +45,13 @@ pub fn flank_penetration(
         return 0.0;
     };
     let margin = 1e-9 * f_pair.facet.size();
+    let reach = (2.0 * f_pair.facet.size() + f_pair.gap().abs()).min(radius);
     let mut deepest = 0.0f64;
     let query = Query {
         point: x[s],
         exclude: u32::try_from(s).ok(),
     };
-    for hit in bvh.within(surface, &query, radius) {
+    for hit in bvh.within(surface, &query, reach) {
         let g = hit.facet;
         let g_nodes = corners(g);
         if g == facet {
@@ -64,10 +68,17 @@ pub fn flank_penetration(
         if !(g_pair.gap() < 0.0 && g_pair.projection.is_inside(LOST_TOLERANCE)) {
             continue;
         }
+        // The corners of `other` not shared with `own` lie in front of `own`'s plane (within
+        // the margin), at least one beyond it: the whole of `other` is in front of `own`.
         let rises = |pair: &NodeFacet, own: &[u32; 3], other: &[u32; 3]| {
-            other.iter().filter(|a| !own.contains(a)).any(|&a| {
-                (x[a as usize] - pair.facet.nodes()[0]).dot(&pair.facet.normal()) > margin
-            })
+            let heights = other
+                .iter()
+                .filter(|a| !own.contains(a))
+                .map(|&a| (x[a as usize] - pair.facet.nodes()[0]).dot(&pair.facet.normal()));
+            let (low, high) = heights.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), z| {
+                (l.min(z), h.max(z))
+            });
+            low >= -margin && high > margin
         };
         if rises(&f_pair, &f_nodes, &g_nodes) && rises(&g_pair, &g_nodes, &f_nodes) {
             deepest = deepest.max(-g_pair.gap());
@@ -124,9 +135,9 @@ mod tests {
         assert_eq!(depth(x, facets, Vec3::new(0.3, 0.5, -0.01), 2), 0.0);
     }
 
-    /// A floor and a wall meshed apart (no shared node), as a corner: a node held on the floor's
-    /// plane, 0.01 into the wall and 0.02 below the floor, projects into neither (its foot on
-    /// the wall is 0.02 below it, within the tolerance) and is 0.01 behind the wall.
+    /// A floor and a wall meshed apart (no shared node), as a corner: a node constrained by the
+    /// floor, 0.01 into the wall and 0.02 below the floor, projects into neither (its foot on the
+    /// wall is 0.02 below it, within the tolerance) and is 0.01 behind the wall.
     #[test]
     fn a_corner_of_separate_pieces_is_seen() {
         let x = vec![
@@ -143,5 +154,43 @@ mod tests {
         let facets = vec![[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]];
         let d = depth(x, facets, Vec3::new(-0.01, 0.5, -0.02), 0);
         assert!((d - 0.01).abs() < 1e-12, "{d}");
+    }
+
+    /// Two facets sharing one node, one rising across the other's plane and one sinking (a
+    /// saddle): neither lies wholly in front of the other, so a node on the first, near the
+    /// shared node and behind the second's plane, is not counted.
+    #[test]
+    fn a_saddle_is_not_a_concave_corner() {
+        let x = vec![
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::new(-1.0, 0.0, 0.3),
+            Vec3::new(0.0, -1.0, -0.3),
+        ];
+        // F = [0, 1, 2] in z = 0; G = [0, 3, 4] tilted: node 3 above F's plane, node 4 below.
+        let facets = vec![[0, 1, 2], [0, 3, 4]];
+        // Behind G's plane (its normal is along (0.3, −0.3, 1)), its foot within 0.1 of G.
+        for node in [Vec3::new(0.01, 0.05, 0.0), Vec3::new(0.02, 0.06, -1e-4)] {
+            assert_eq!(depth(x.clone(), facets.clone(), node, 0), 0.0, "{node:?}");
+        }
+    }
+
+    /// A thin plate (top and bottom 0.01 apart, normals out): a node outside, just below the
+    /// bottom facet it is constrained by, lies behind the top's plane, but the top is behind
+    /// the bottom (not concave to it), so it is not counted.
+    #[test]
+    fn a_node_below_a_thin_plate_is_not_behind_its_top() {
+        let x = vec![
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::new(0.0, 0.0, 0.01),
+            Vec3::new(1.0, 0.0, 0.01),
+            Vec3::new(0.0, 1.0, 0.01),
+        ];
+        // Bottom [0, 2, 1] (normal −z), top [3, 4, 5] (normal +z).
+        let facets = vec![[0, 2, 1], [3, 4, 5]];
+        assert_eq!(depth(x, facets, Vec3::new(0.2, 0.2, -0.001), 0), 0.0);
     }
 }

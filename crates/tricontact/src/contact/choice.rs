@@ -25,7 +25,7 @@
 //!   flank only (its foot on the other flank's plane lies beyond the valley line), so the
 //!   penetrated facet is chosen; for a node above both flanks either choice has `P > 0`. The
 //!   exception is the wedge below the valley line between the flanks' inward normals there (its
-//!   angle is the kink `κ` between the normals; at a penetration `|P|` it is about `|P| tan κ`
+//!   angle is the kink `κ` between the normals; at a penetration `|P|` it is `2|P| tan(κ/2)`
 //!   wide): a node in it has its foot beyond the valley line on both flanks' planes and gets
 //!   `None`. A caller that knows the node's previous facet can keep its plane, extended, while
 //!   the node penetrates it (the solver does).
