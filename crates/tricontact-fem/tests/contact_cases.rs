@@ -1199,3 +1199,187 @@ fn multiplier_nodes_spreading_past_the_master_edge_keep_their_facet() {
     );
     assert!(lo > 0.995e-2 && hi < 1.005e-2, "pressure {lo} … {hi}");
 }
+
+/// A strip clamped at one end and wrapped onto a stiffer base by a follower pressure, with
+/// multipliers and with a penalty: nodes of its tip cycle and are held closed. With only the
+/// pair's tolerance on their pull (`λ/α`, loose where the default penalty `10 E h` is far above
+/// the load's scale) the first increment of the wrap converged with held nodes pulling 0.22
+/// each and the base pulled up (its support reaction −0.027 with multipliers, −0.044 with a
+/// penalty). A held node may now pull by at most a tenth of the largest push: the increment is
+/// cut back, and the base is pressed at every increment.
+#[test]
+fn a_strip_wrapped_onto_a_base_never_pulls_it() {
+    let base = box_mesh([2.5, 0.5, 0.2], [10, 3, 2], ElementKind::Hex8);
+    let strip = box_mesh([2.0, 0.3, 0.1], [24, 3, 2], ElementKind::Hex8);
+    let mesh = tricontact_fem::structured::stack(&base, &strip, [0.0, 0.1, 0.3]);
+    for method in ["multiplier", "penalty"] {
+        let mut text = String::new();
+        for (name, e, group) in [("b", 1e5, "lower_solid"), ("s", 1e4, "upper_solid")] {
+            text += &format!(
+                "[[material]]\nname = \"{name}\"\ntype = \"neo_hooke\"\nE = {e}\nnu = 0.3\n\
+                 [[body]]\ngroup = \"{group}\"\nmaterial = \"{name}\"\n"
+            );
+        }
+        for g in ["lower_zmin", "upper_xmin"] {
+            text += &format!("[[boundary]]\ngroup = \"{g}\"\nfix = [\"x\", \"y\", \"z\"]\n");
+        }
+        for (p, step) in [(0.05, "touch"), (0.5, "wrap")] {
+            text += &format!(
+                "[[load]]\ngroup = \"upper_zmax\"\npressure = {p}\nfollower = true\nsteps = [\"{step}\"]\n"
+            );
+        }
+        text += &format!(
+            "[[contact]]\nslave = \"upper_zmin\"\nmaster = \"lower_zmax\"\nmethod = \"{method}\"\n"
+        );
+        for (name, n) in [("touch", 4), ("wrap", 6)] {
+            text += &format!("[[step]]\nname = \"{name}\"\nincrements = {n}\nnlgeom = true\n");
+        }
+        let an = common::analysis(mesh.clone(), &text);
+        let (_, records, _) = common::solve_contact(&an);
+        let pressed: Vec<f64> = records.iter().map(|r| r.reactions[0][2]).collect();
+        let most = pressed.iter().copied().fold(0.0f64, f64::max);
+        assert!(most > 0.05, "{method}: {pressed:?}");
+        assert!(
+            pressed.iter().all(|&f| f >= -1e-9 * most),
+            "{method}: the base is pulled: {pressed:?}"
+        );
+    }
+}
+
+/// A block pressed on a base and slid past the base's edge, with multipliers and the augmented
+/// Lagrangian. Its leading row of nodes leaves the base's facets; each keeps its facet's plane
+/// while it touches it within the pair's tolerance. With `P ≤ 0` required instead, a node held
+/// at `P = 0` lost its facet to round-off and both runs stalled at a third of the slide (even
+/// at 1/4096 of the increment).
+#[test]
+fn a_block_slides_off_the_edge_of_the_base() {
+    let base = box_mesh([2.0, 1.0, 0.5], [16, 8, 3], ElementKind::Hex8);
+    let block = box_mesh([0.6, 0.6, 0.4], [6, 6, 4], ElementKind::Hex8);
+    let mesh = tricontact_fem::structured::stack(&base, &block, [1.2, 0.2, 0.5]);
+    for method in ["multiplier", "augmented"] {
+        let mut text = String::new();
+        for (name, e, group) in [("b", 1000.0, "lower_solid"), ("s", 100.0, "upper_solid")] {
+            text += &format!(
+                "[[material]]\nname = \"{name}\"\ntype = \"neo_hooke\"\nE = {e}\nnu = 0.3\n\
+                 [[body]]\ngroup = \"{group}\"\nmaterial = \"{name}\"\n"
+            );
+        }
+        text += "[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n";
+        for (x, step) in [(0.0, "press"), (0.6, "slide")] {
+            text += &format!(
+                "[[boundary]]\ngroup = \"upper_zmax\"\ndisplacement = {{ x = {x}, y = 0.0, z = -0.02 }}\nsteps = [\"{step}\"]\n"
+            );
+        }
+        text += &format!(
+            "[[contact]]\nslave = \"upper_zmin\"\nmaster = \"lower_zmax\"\nmethod = \"{method}\"\n"
+        );
+        for (name, n) in [("press", 2), ("slide", 12)] {
+            text += &format!("[[step]]\nname = \"{name}\"\nincrements = {n}\nnlgeom = true\n");
+        }
+        let an = common::analysis(mesh.clone(), &text);
+        let (terms, records, _) = common::solve_contact(&an);
+        let last = records.last().expect("increments");
+        assert!(last.step == 1 && last.load_factor == 1.0, "{method}");
+        // Past the edge, a third of the block still on the base presses it.
+        assert!(history(&terms, "_normal_force") > 0.0, "{method}");
+    }
+}
+
+/// A soft cube pressed diagonally into the corner of a floor and a wall (meshed apart, one
+/// master group), with a penalty and with multipliers. Each slave node is constrained against
+/// one facet, so the cube's edge in the corner, held by the floor, sinks into the wall: the
+/// penetration of the constrained facets' planes stays small, but the depth behind the wall is
+/// reported (`contact::flank`); with a penalty it read 1.8·10⁻⁴ before, the constrained gap
+/// alone, for 6.4·10⁻³. With multipliers the run failed at its first increment while nodes at
+/// `P = 0` lost their facet past its edge (see `multiplier_nodes_spreading_past_…`).
+#[test]
+fn penetration_behind_the_other_flank_of_a_corner_is_reported() {
+    let floor = box_mesh([1.0, 1.0, 0.3], [10, 5, 3], ElementKind::Hex8);
+    let wall = box_mesh([0.2, 1.0, 0.5], [2, 5, 5], ElementKind::Hex8);
+    let cube = box_mesh([0.4, 0.4, 0.4], [4, 4, 4], ElementKind::Hex8);
+    let stack = tricontact_fem::structured::stack;
+    let mut mesh = stack(
+        &stack(&floor, &wall, [0.0, 0.0, 0.3]),
+        &cube,
+        [0.2, 0.3, 0.3],
+    );
+    let union = |mesh: &Mesh, name: &str, parts: &[(&str, f64)]| {
+        let mut elements = Vec::new();
+        for &(group, x_min) in parts {
+            let g = mesh.group(group).expect("group");
+            elements.extend(g.elements.iter().copied().filter(|&e| {
+                let nodes = &mesh.elements[e].nodes;
+                let x = nodes.iter().map(|&a| mesh.nodes[a][0]).sum::<f64>() / nodes.len() as f64;
+                x >= x_min
+            }));
+        }
+        let mut nodes: Vec<usize> = elements
+            .iter()
+            .flat_map(|&e| mesh.elements[e].nodes.clone())
+            .collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        tricontact_fem::mesh::Group {
+            name: name.into(),
+            dim: 2,
+            elements,
+            nodes,
+        }
+    };
+    let master = union(
+        &mesh,
+        "corner",
+        &[("lower_lower_zmax", 0.2), ("lower_upper_xmax", 0.0)],
+    );
+    let slave = union(
+        &mesh,
+        "cube_contact",
+        &[("upper_xmin", 0.0), ("upper_zmin", 0.0)],
+    );
+    mesh.groups.extend([master, slave]);
+    let mut text = String::new();
+    for (name, e, groups) in [
+        (
+            "stiff",
+            1000.0,
+            &["lower_lower_solid", "lower_upper_solid"][..],
+        ),
+        ("soft", 100.0, &["upper_solid"][..]),
+    ] {
+        text +=
+            &format!("[[material]]\nname = \"{name}\"\ntype = \"neo_hooke\"\nE = {e}\nnu = 0.3\n");
+        for g in groups {
+            text += &format!("[[body]]\ngroup = \"{g}\"\nmaterial = \"{name}\"\n");
+        }
+    }
+    for g in ["lower_lower_zmin", "lower_upper_zmin"] {
+        text += &format!("[[boundary]]\ngroup = \"{g}\"\nfix = [\"x\", \"y\", \"z\"]\n");
+    }
+    text +=
+        "[[boundary]]\ngroup = \"upper_zmax\"\ndisplacement = { x = -0.02, y = 0.0, z = -0.02 }\n";
+    text += "[[step]]\nincrements = 4\nnlgeom = true\n";
+    for method in ["penalty", "multiplier"] {
+        let pair = format!(
+            "[[contact]]\nslave = \"cube_contact\"\nmaster = \"corner\"\nmethod = \"{method}\"\n"
+        );
+        let an = common::analysis(mesh.clone(), &format!("{text}{pair}"));
+        let (terms, records, _) = common::solve_contact(&an);
+        assert!(records.last().is_some_and(|r| r.load_factor == 1.0));
+        let gap = terms
+            .states()
+            .iter()
+            .flatten()
+            .flatten()
+            .filter(|st| st.facet.is_some())
+            .fold(0.0f64, |m, st| m.max(-st.gap));
+        let reported = history(&terms, "_max_penetration");
+        println!(
+            "corner, {method}: constrained gap {gap:.3e}, reported penetration {reported:.3e}"
+        );
+        assert!(gap < 1e-3, "{method}: constrained gap {gap}");
+        assert!(
+            reported > 3e-3 && reported > 10.0 * gap,
+            "{method}: reported {reported}, gap {gap}"
+        );
+    }
+}
