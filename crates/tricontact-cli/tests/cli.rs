@@ -845,22 +845,25 @@ fn an_output_folder_that_is_a_file_is_a_model_problem() {
         .expect("folder");
     let model = dir.join("model.toml");
     std::fs::write(&model, &src).expect("write");
-    let expect = format!(
+    // `check` and `run` both fail with `expect`.
+    let refused = |expect: &str| {
+        for cmd in ["check", "run"] {
+            let o = bin()
+                .args([cmd.as_ref(), model.as_os_str()])
+                .output()
+                .expect("runs");
+            let stderr = String::from_utf8_lossy(&o.stderr);
+            assert!(
+                !o.status.success() && stderr.contains(expect),
+                "{cmd}: {stderr}"
+            );
+        }
+    };
+    refused(&format!(
         "{}:{line}: output.folder {}: exists and is not a folder",
         model.display(),
         mesh.display()
-    );
-    for cmd in ["check", "run"] {
-        let o = bin()
-            .args([cmd.as_ref(), model.as_os_str()])
-            .output()
-            .expect("runs");
-        let stderr = String::from_utf8_lossy(&o.stderr);
-        assert!(
-            !o.status.success() && stderr.contains(&expect),
-            "{cmd}: {stderr}"
-        );
-    }
+    ));
     let o = bin()
         .args([
             "run".as_ref(),
@@ -881,23 +884,12 @@ fn an_output_folder_that_is_a_file_is_a_model_problem() {
         ),
     )
     .expect("write");
-    let expect = format!(
+    refused(&format!(
         "{}:{line}: output.folder {}: cannot be created: {} is a file, not a folder",
         model.display(),
         below.display(),
         mesh.display()
-    );
-    for cmd in ["check", "run"] {
-        let o = bin()
-            .args([cmd.as_ref(), model.as_os_str()])
-            .output()
-            .expect("runs");
-        let stderr = String::from_utf8_lossy(&o.stderr);
-        assert!(
-            !o.status.success() && stderr.contains(&expect),
-            "{cmd}: {stderr}"
-        );
-    }
+    ));
     std::fs::remove_dir_all(&dir).ok();
 }
 

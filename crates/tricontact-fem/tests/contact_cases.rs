@@ -38,6 +38,34 @@ fn contact(method: &str, extra: &str) -> String {
     )
 }
 
+/// Two 1 × 1 × 0.5 hex8 blocks of `n × n × 1` elements, one on the other (`lower_*`, `upper_*`):
+/// the contact patch test's geometry.
+fn patch_blocks(n: usize) -> Mesh {
+    let block = box_mesh([1.0, 1.0, 0.5], [n, n, 1], ElementKind::Hex8);
+    tricontact_fem::structured::stack(&block, &block, [0.0, 0.0, 0.5])
+}
+
+/// Neo-Hookean materials (ν = 0.3) and bodies: `lower_solid` of modulus `lower`, `upper_solid`
+/// of modulus `upper`.
+fn neo_hooke_bodies(lower: f64, upper: f64) -> String {
+    let mut text = String::new();
+    for (name, e, group) in [("lo", lower, "lower_solid"), ("up", upper, "upper_solid")] {
+        text += &format!(
+            "[[material]]\nname = \"{name}\"\ntype = \"neo_hooke\"\nE = {e}\nnu = 0.3\n\
+             [[body]]\ngroup = \"{group}\"\nmaterial = \"{name}\"\n"
+        );
+    }
+    text
+}
+
+/// Named `[[step]]` tables with `nlgeom`, of the given increments.
+fn nlgeom_steps(steps: &[(&str, usize)]) -> String {
+    steps
+        .iter()
+        .map(|(name, n)| format!("[[step]]\nname = \"{name}\"\nincrements = {n}\nnlgeom = true\n"))
+        .collect()
+}
+
 fn node_force(terms: &ContactTerms, a: usize) -> [f64; 3] {
     let f = terms.forces();
     [f[3 * a], f[3 * a + 1], f[3 * a + 2]]
@@ -466,9 +494,7 @@ fn non_matching_meshes_pressure_deviation_bounds() {
 
 #[test]
 fn small_sliding_passes_the_patch_test() {
-    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
-    let u = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
-    let mesh = tricontact_fem::structured::stack(&l, &u, [0.0, 0.0, 0.5]);
+    let mesh = patch_blocks(2);
     let mut text = format!("{MAT}[[load]]\ngroup = \"upper_zmax\"\npressure = 1.0\n");
     for side in ["lower", "upper"] {
         for (g, c) in [("xmin", "x"), ("xmax", "x"), ("ymin", "y"), ("ymax", "y")] {
@@ -532,9 +558,7 @@ fn adjust_removes_small_initial_penetrations_and_reports_deeper_ones() {
 
 #[test]
 fn bad_contact_input_is_rejected_with_a_clear_message() {
-    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
-    let u = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
-    let mesh = tricontact_fem::structured::stack(&l, &u, [0.0, 0.0, 0.5]);
+    let mesh = patch_blocks(2);
     let base = format!("[mesh]\nfile = \"x.msh\"\n{MAT}[[step]]\n");
     let err = |c: &str| {
         let text = format!("{base}{c}");
@@ -736,9 +760,7 @@ fn contact_fields_and_history_columns_are_written() {
 #[test]
 fn penalty_and_augmented_cycling_nodes_are_held_closed() {
     use tricontact_fem::assembly::ExtraTerms;
-    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
-    let u = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
-    let mesh = tricontact_fem::structured::stack(&l, &u, [0.0, 0.0, 0.5]);
+    let mesh = patch_blocks(2);
     for method in ["penalty", "augmented"] {
         let text = format!(
             "{MAT}[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n{}[[step]]\n",
@@ -797,9 +819,7 @@ fn penalty_and_augmented_cycling_nodes_are_held_closed() {
 #[test]
 fn multiplier_status_cycling_is_frozen_and_reported() {
     use tricontact_fem::assembly::ExtraTerms;
-    let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
-    let u = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
-    let mesh = tricontact_fem::structured::stack(&l, &u, [0.0, 0.0, 0.5]);
+    let mesh = patch_blocks(2);
     let text = format!(
         "{MAT}[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n{}[[step]]\n",
         contact("multiplier", "")
@@ -1165,16 +1185,8 @@ fn a_pair_on_one_connected_part_is_noted_as_self_contact() {
 /// its constraint, and Newton diverged at every increment down to 1/32 of the load.
 #[test]
 fn multiplier_nodes_spreading_past_the_master_edge_keep_their_facet() {
-    let l = box_mesh([1.0, 1.0, 0.5], [4, 4, 1], ElementKind::Hex8);
-    let u = box_mesh([1.0, 1.0, 0.5], [4, 4, 1], ElementKind::Hex8);
-    let mesh = tricontact_fem::structured::stack(&l, &u, [0.0, 0.0, 0.5]);
-    let mut text = String::new();
-    for (name, e) in [("lo", 10.0), ("up", 1.0)] {
-        text +=
-            &format!("[[material]]\nname = \"{name}\"\ntype = \"neo_hooke\"\nE = {e}\nnu = 0.3\n");
-    }
-    text += "[[body]]\ngroup = \"lower_solid\"\nmaterial = \"lo\"\n";
-    text += "[[body]]\ngroup = \"upper_solid\"\nmaterial = \"up\"\n";
+    let mesh = patch_blocks(4);
+    let mut text = neo_hooke_bodies(10.0, 1.0);
     for (g, c) in [
         ("lower_zmin", "z"),
         ("lower_xmin", "x"),
@@ -1186,7 +1198,7 @@ fn multiplier_nodes_spreading_past_the_master_edge_keep_their_facet() {
     }
     text += "[[load]]\ngroup = \"upper_zmax\"\npressure = 0.01\n";
     text += &contact("multiplier", "");
-    text += "[[step]]\nincrements = 2\nnlgeom = true\n";
+    text += &nlgeom_steps(&[("press", 2)]);
     let an = common::analysis(mesh, &text);
     let (terms, records, _) = common::solve_contact(&an);
     assert!(records.len() == 2 && records[1].load_factor == 1.0);
@@ -1213,13 +1225,7 @@ fn a_strip_wrapped_onto_a_base_never_pulls_it() {
     let strip = box_mesh([2.0, 0.3, 0.1], [24, 3, 2], ElementKind::Hex8);
     let mesh = tricontact_fem::structured::stack(&base, &strip, [0.0, 0.1, 0.3]);
     for method in ["multiplier", "penalty"] {
-        let mut text = String::new();
-        for (name, e, group) in [("b", 1e5, "lower_solid"), ("s", 1e4, "upper_solid")] {
-            text += &format!(
-                "[[material]]\nname = \"{name}\"\ntype = \"neo_hooke\"\nE = {e}\nnu = 0.3\n\
-                 [[body]]\ngroup = \"{group}\"\nmaterial = \"{name}\"\n"
-            );
-        }
+        let mut text = neo_hooke_bodies(1e5, 1e4);
         for g in ["lower_zmin", "upper_xmin"] {
             text += &format!("[[boundary]]\ngroup = \"{g}\"\nfix = [\"x\", \"y\", \"z\"]\n");
         }
@@ -1228,12 +1234,8 @@ fn a_strip_wrapped_onto_a_base_never_pulls_it() {
                 "[[load]]\ngroup = \"upper_zmax\"\npressure = {p}\nfollower = true\nsteps = [\"{step}\"]\n"
             );
         }
-        text += &format!(
-            "[[contact]]\nslave = \"upper_zmin\"\nmaster = \"lower_zmax\"\nmethod = \"{method}\"\n"
-        );
-        for (name, n) in [("touch", 4), ("wrap", 6)] {
-            text += &format!("[[step]]\nname = \"{name}\"\nincrements = {n}\nnlgeom = true\n");
-        }
+        text += &contact(method, "");
+        text += &nlgeom_steps(&[("touch", 4), ("wrap", 6)]);
         let an = common::analysis(mesh.clone(), &text);
         let (_, records, _) = common::solve_contact(&an);
         let pressed: Vec<f64> = records.iter().map(|r| r.reactions[0][2]).collect();
@@ -1257,25 +1259,15 @@ fn a_block_slides_off_the_edge_of_the_base() {
     let block = box_mesh([0.6, 0.6, 0.4], [6, 6, 4], ElementKind::Hex8);
     let mesh = tricontact_fem::structured::stack(&base, &block, [1.2, 0.2, 0.5]);
     for method in ["multiplier", "augmented"] {
-        let mut text = String::new();
-        for (name, e, group) in [("b", 1000.0, "lower_solid"), ("s", 100.0, "upper_solid")] {
-            text += &format!(
-                "[[material]]\nname = \"{name}\"\ntype = \"neo_hooke\"\nE = {e}\nnu = 0.3\n\
-                 [[body]]\ngroup = \"{group}\"\nmaterial = \"{name}\"\n"
-            );
-        }
+        let mut text = neo_hooke_bodies(1000.0, 100.0);
         text += "[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n";
         for (x, step) in [(0.0, "press"), (0.6, "slide")] {
             text += &format!(
                 "[[boundary]]\ngroup = \"upper_zmax\"\ndisplacement = {{ x = {x}, y = 0.0, z = -0.02 }}\nsteps = [\"{step}\"]\n"
             );
         }
-        text += &format!(
-            "[[contact]]\nslave = \"upper_zmin\"\nmaster = \"lower_zmax\"\nmethod = \"{method}\"\n"
-        );
-        for (name, n) in [("press", 2), ("slide", 12)] {
-            text += &format!("[[step]]\nname = \"{name}\"\nincrements = {n}\nnlgeom = true\n");
-        }
+        text += &contact(method, "");
+        text += &nlgeom_steps(&[("press", 2), ("slide", 12)]);
         let an = common::analysis(mesh.clone(), &text);
         let (terms, records, _) = common::solve_contact(&an);
         let last = records.last().expect("increments");
@@ -1357,7 +1349,7 @@ fn penetration_behind_the_other_flank_of_a_corner_is_reported() {
     }
     text +=
         "[[boundary]]\ngroup = \"upper_zmax\"\ndisplacement = { x = -0.02, y = 0.0, z = -0.02 }\n";
-    text += "[[step]]\nincrements = 4\nnlgeom = true\n";
+    text += &nlgeom_steps(&[("press", 4)]);
     for method in ["penalty", "multiplier"] {
         let pair = format!(
             "[[contact]]\nslave = \"cube_contact\"\nmaster = \"corner\"\nmethod = \"{method}\"\n"
