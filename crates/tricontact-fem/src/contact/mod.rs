@@ -56,8 +56,9 @@
 //!   projection region keeps its previous facet while its foot is within [`LOST_TOLERANCE`] of it
 //!   and it touches it (`P` at most the pair's tolerance: with `P ≤ 0` required, a multiplier
 //!   node held at `P = 0` lost its facet to round-off as a soft block spread past the master's
-//!   edge, and Newton diverged; `tests/contact_cases.rs`). Measured and not kept: a second penalty term for a node behind the
-//!   plane of a facet across a concave edge of its chosen facet, the foot within
+//!   edge, and Newton diverged; `tests/contact_cases.rs`). Measured and not kept: a second
+//!   penalty term for a node behind the plane of a facet across a concave edge of its chosen
+//!   facet (what [`flank`] now measures for the reports), the foot within
 //!   [`LOST_TOLERANCE`] of it (near a concave edge the body is the union of the two flanks'
 //!   half-spaces, so keeping out of it takes both constraints), for kinks of at least 0°, 5°,
 //!   15° or 30° (`tricontact run`, against the runs above). `contact-block` pressed 30 %
@@ -102,9 +103,9 @@ pub const LOST_TOLERANCE: f64 = 0.1;
 pub const MAX_SWITCHES: u32 = 4;
 
 /// The largest pull of a node held closed at convergence, as a share of the largest push of the
-/// pair's closed nodes, where one presses (beside the pair's `tolerance` on `λ/α`, a gap, which a penalty far
-/// above the load's scale makes loose: a strip wrapped onto a base by a follower pressure
-/// converged with held nodes pulling 0.22 each and the pair's net force a pull).
+/// pair's closed nodes, where one presses. It stands beside the pair's `tolerance` on `λ/α`, a
+/// gap, which a penalty far above the load's scale makes loose: a strip wrapped onto a base by a
+/// follower pressure converged with held nodes pulling 0.22 each and the pair's net force a pull.
 pub const HELD_PULL_SHARE: f64 = 0.1;
 
 /// The contact pairs of an analysis with their state.
