@@ -45,6 +45,32 @@ fn patch_blocks(n: usize) -> Mesh {
     tricontact_fem::structured::stack(&block, &block, [0.0, 0.0, 0.5])
 }
 
+/// A surface group `name` of the faces of the groups `parts` whose centroid has `x ≥` the given
+/// bound.
+fn surface_group(mesh: &Mesh, name: &str, parts: &[(&str, f64)]) -> tricontact_fem::mesh::Group {
+    let mut elements = Vec::new();
+    for &(group, x_min) in parts {
+        let g = mesh.group(group).expect("group");
+        elements.extend(g.elements.iter().copied().filter(|&e| {
+            let nodes = &mesh.elements[e].nodes;
+            let x = nodes.iter().map(|&a| mesh.nodes[a][0]).sum::<f64>() / nodes.len() as f64;
+            x >= x_min
+        }));
+    }
+    let mut nodes: Vec<usize> = elements
+        .iter()
+        .flat_map(|&e| mesh.elements[e].nodes.clone())
+        .collect();
+    nodes.sort_unstable();
+    nodes.dedup();
+    tricontact_fem::mesh::Group {
+        name: name.into(),
+        dim: 2,
+        elements,
+        nodes,
+    }
+}
+
 /// Neo-Hookean materials (ν = 0.3) and bodies: `lower_solid` of modulus `lower`, `upper_solid`
 /// of modulus `upper`.
 fn neo_hooke_bodies(lower: f64, upper: f64) -> String {
@@ -1295,35 +1321,12 @@ fn penetration_behind_the_other_flank_of_a_corner_is_reported() {
         &cube,
         [0.2, 0.3, 0.3],
     );
-    let union = |mesh: &Mesh, name: &str, parts: &[(&str, f64)]| {
-        let mut elements = Vec::new();
-        for &(group, x_min) in parts {
-            let g = mesh.group(group).expect("group");
-            elements.extend(g.elements.iter().copied().filter(|&e| {
-                let nodes = &mesh.elements[e].nodes;
-                let x = nodes.iter().map(|&a| mesh.nodes[a][0]).sum::<f64>() / nodes.len() as f64;
-                x >= x_min
-            }));
-        }
-        let mut nodes: Vec<usize> = elements
-            .iter()
-            .flat_map(|&e| mesh.elements[e].nodes.clone())
-            .collect();
-        nodes.sort_unstable();
-        nodes.dedup();
-        tricontact_fem::mesh::Group {
-            name: name.into(),
-            dim: 2,
-            elements,
-            nodes,
-        }
-    };
-    let master = union(
+    let master = surface_group(
         &mesh,
         "corner",
         &[("lower_lower_zmax", 0.2), ("lower_upper_xmax", 0.0)],
     );
-    let slave = union(
+    let slave = surface_group(
         &mesh,
         "cube_contact",
         &[("upper_xmin", 0.0), ("upper_zmin", 0.0)],
@@ -1374,4 +1377,42 @@ fn penetration_behind_the_other_flank_of_a_corner_is_reported() {
             "{method}: reported {reported}, gap {gap}"
         );
     }
+}
+
+/// A block pressed onto a plate one element thick, with multipliers, the master every face of
+/// the plate. A Newton step carried block nodes past the plate's mid-plane, where its bottom
+/// face is nearer than its top; constrained by the bottom, they were pushed on through the plate
+/// (normal force 2.79 against the plate's support reaction 0.95). A node penetrating its facet
+/// now keeps it rather than take one facing the other way: the run equals the one whose master
+/// is the plate's top alone.
+#[test]
+fn a_block_does_not_tunnel_through_a_thin_plate() {
+    let plate = box_mesh([2.0, 2.0, 0.05], [20, 20, 1], ElementKind::Hex8);
+    let block = box_mesh([0.4, 0.4, 0.2], [6, 6, 3], ElementKind::Hex8);
+    let mut mesh = tricontact_fem::structured::stack(&plate, &block, [0.8, 0.8, 0.06]);
+    let faces = ["xmin", "xmax", "ymin", "ymax", "zmin", "zmax"].map(|f| format!("lower_{f}"));
+    let all: Vec<(&str, f64)> = faces
+        .iter()
+        .map(|f| (f.as_str(), f64::NEG_INFINITY))
+        .collect();
+    let master = surface_group(&mesh, "plate_all", &all);
+    mesh.groups.push(master);
+    let mut text = neo_hooke_bodies(1000.0, 100.0);
+    for g in &faces[..4] {
+        text += &format!("[[boundary]]\ngroup = \"{g}\"\nfix = [\"x\", \"y\", \"z\"]\n");
+    }
+    text += "[[boundary]]\ngroup = \"upper_zmax\"\ndisplacement = { x = 0.0, y = 0.0, z = -0.2 }\n";
+    text += &nlgeom_steps(&[("press", 10)]);
+    let force = |master: &str| {
+        let pair = contact("multiplier", "").replace("lower_zmax", master);
+        let an = common::analysis(mesh.clone(), &format!("{text}{pair}"));
+        let (terms, _, _) = common::solve_contact(&an);
+        history(&terms, "_normal_force")
+    };
+    let (top, all) = (force("lower_zmax"), force("plate_all"));
+    assert!(top > 0.5, "{top}");
+    assert!(
+        (all - top).abs() <= 1e-9 * top,
+        "every face {all}, the top alone {top}"
+    );
 }

@@ -11,7 +11,9 @@
 //! shape functions and normal frozen at the start of the increment (see [`gap`]). Hysteresis: a
 //! node keeps its previous facet while it projects into it within [`HYSTERESIS`] and its `|P|`
 //! there exceeds the chosen one's by at most `HYSTERESIS · h` (no flip-flopping across an edge,
-//! where `∇²P` jumps, from round-off). The node's terms
+//! where `∇²P` jumps, from round-off); and while it penetrates its previous facet (foot within
+//! [`LOST_TOLERANCE`]) it takes no facet facing the other way (no tunnelling through a thin
+//! part whose far side a Newton step brought nearer). The node's terms
 //! ([`penalty`], [`multiplier`], [`augmented`]) are scattered to global DOFs `3·node + d`;
 //! multipliers are extra unknowns after the nodal DOFs, one per slave node of each multiplier pair.
 //!
@@ -292,6 +294,18 @@ impl ContactTerms {
                     })
                     .map(|(f, nodes, pair)| (f, nodes, Gap::Finite(pair)));
             };
+            // Sides: while the node penetrates its previous facet (its foot within
+            // LOST_TOLERANCE), a facet facing the other way is not taken. A Newton step can carry
+            // a node past a thin part's mid-plane, where the far side is nearer: taking it pushed
+            // the node on through the part (a block tunnelled through a plate one element thick).
+            if let Some((prev, nodes, old)) = previous
+                && prev != f
+                && old.gap() < 0.0
+                && old.projection.is_inside(LOST_TOLERANCE)
+                && old.facet.normal().dot(&pair.facet.normal()) < 0.0
+            {
+                return Some((prev, nodes, Gap::Finite(old)));
+            }
             // Hysteresis: keep the previous facet while the node still projects into it within
             // HYSTERESIS (barycentric) and its |P| is not larger than the chosen one's by more
             // than HYSTERESIS·h. A node on a shared edge or vertex otherwise flips between facets
