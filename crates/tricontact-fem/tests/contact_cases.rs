@@ -1416,3 +1416,25 @@ fn a_block_does_not_tunnel_through_a_thin_plate() {
         "every face {all}, the top alone {top}"
     );
 }
+
+/// A slave surface much coarser than a deformable master is noted for a one-pass pair (the
+/// master's nodes can pass between the slave's), not with two passes, nor the other way round.
+#[test]
+fn a_slave_coarser_than_its_master_is_noted() {
+    let fine = box_mesh([1.0, 1.0, 0.5], [10, 10, 1], ElementKind::Hex8);
+    let coarse = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
+    let base = format!(
+        "{MAT}[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n[[step]]\n"
+    );
+    let noted = |lower: &Mesh, upper: &Mesh, extra: &str| {
+        let mesh = tricontact_fem::structured::stack(lower, upper, [0.0, 0.0, 0.5]);
+        let an = common::analysis(mesh, &format!("{base}{}", contact("penalty", extra)));
+        an.contacts[0].report.join(" ").contains("× the master's")
+    };
+    assert!(noted(&fine, &coarse, ""), "a coarse slave on a fine master");
+    assert!(!noted(&fine, &coarse, "two_pass = true"), "two passes");
+    assert!(
+        !noted(&coarse, &fine, ""),
+        "a fine slave on a coarse master"
+    );
+}
