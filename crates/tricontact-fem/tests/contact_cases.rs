@@ -1438,3 +1438,36 @@ fn a_slave_coarser_than_its_master_is_noted() {
         "a fine slave on a coarse master"
     );
 }
+
+/// `small_sliding` keeps each node's plane from the start of the increment; slid two block
+/// lengths in five increments, the block's nodes end far from those planes, behind the base's
+/// dish where they are now. That depth is reported (it read 10⁻¹⁸, the frozen planes' gap),
+/// and is far above the same slide's without `small_sliding`.
+#[test]
+fn a_large_slide_with_small_sliding_reports_its_penetration() {
+    let base = box_mesh([4.0, 1.0, 0.5], [32, 8, 2], ElementKind::Hex8);
+    let block = box_mesh([0.5, 0.5, 0.3], [4, 4, 2], ElementKind::Hex8);
+    let mesh = tricontact_fem::structured::stack(&base, &block, [0.25, 0.25, 0.5]);
+    let mut text = neo_hooke_bodies(1000.0, 1000.0);
+    text += "[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n";
+    for (x, step) in [(0.0, "press"), (2.0, "slide")] {
+        text += &format!(
+            "[[boundary]]\ngroup = \"upper_zmax\"\ndisplacement = {{ x = {x}, y = 0.0, z = -0.01 }}\nsteps = [\"{step}\"]\n"
+        );
+    }
+    text += &nlgeom_steps(&[("press", 2), ("slide", 5)]);
+    let penetration = |extra: &str| {
+        let an = common::analysis(
+            mesh.clone(),
+            &format!("{text}{}", contact("multiplier", extra)),
+        );
+        let (terms, _, _) = common::solve_contact(&an);
+        history(&terms, "_max_penetration")
+    };
+    let (frozen, followed) = (penetration("small_sliding = true"), penetration(""));
+    println!("small sliding {frozen:.3e}, sliding {followed:.3e}");
+    assert!(
+        frozen > 1e-3 && frozen > 100.0 * followed,
+        "{frozen} against {followed}"
+    );
+}

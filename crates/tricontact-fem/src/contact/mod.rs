@@ -372,8 +372,11 @@ impl ContactTerms {
 }
 
 impl ContactTerms {
-    /// Each slave node's depth behind a facet across a concave edge of its facet
-    /// ([`flank::flank_penetration`]), for the reports.
+    /// Each slave node's depth behind the master that its constraint does not hold, for the
+    /// reports: behind a facet across a concave edge of its facet
+    /// ([`flank::flank_penetration`]), and with `small_sliding`, behind the facet the node is
+    /// over now (its constraint is the plane frozen at the start of the increment, which a
+    /// large slide leaves far behind).
     fn measure_flanks(&mut self, u: &[f64]) -> Result<(), String> {
         if self.pairs.is_empty() {
             return Ok(());
@@ -383,10 +386,17 @@ impl ContactTerms {
             for (q, pass) in pair.passes.iter().enumerate() {
                 let bvh = Bvh::build(&pass.surface, &x, pass.radius).map_err(|e| e.to_string())?;
                 for (j, st) in self.trial[p][q].iter_mut().enumerate() {
+                    let s = pass.slaves[j];
                     st.flank = st.facet.map_or(0.0, |f| {
-                        let node = (pass.slaves[j], f);
-                        flank::flank_penetration(&pass.surface, &bvh, &x, node, pass.radius)
+                        flank::flank_penetration(&pass.surface, &bvh, &x, (s, f), pass.radius)
                     });
+                    if pair.small_sliding
+                        && let Ok(node) = u32::try_from(s)
+                        && let Some((_, now)) =
+                            choose_facet(&pass.surface, &bvh, &x, node, pass.radius)
+                    {
+                        st.flank = st.flank.max(-now.gap());
+                    }
                 }
             }
         }

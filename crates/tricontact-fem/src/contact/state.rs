@@ -14,8 +14,9 @@ pub struct NodeState {
     pub normal: [f64; 3],
     /// Gap `P` (0 without facet).
     pub gap: f64,
-    /// At the last convergence, the node's depth behind a facet across a concave edge of its
-    /// facet, which its one constraint does not hold ([`super::flank`]; 0 for none).
+    /// At the last convergence, the node's depth behind the master that its one constraint
+    /// does not hold: behind a facet across a concave edge of its facet ([`super::flank`]), or
+    /// with `small_sliding` behind the facet it is over now (0 for none).
     pub flank: f64,
     /// Normal multiplier at the last evaluation (`λ`, `αP` or `λ̂`; ≤ 0 in compression, 0 open).
     pub lambda: f64,
