@@ -1441,8 +1441,9 @@ fn a_slave_coarser_than_its_master_is_noted() {
 
 /// `small_sliding` keeps each node's plane from the start of the increment; slid two block
 /// lengths in five increments, the block's nodes end far from those planes, behind the base's
-/// dish where they are now. That depth is reported (it read 10⁻¹⁸, the frozen planes' gap),
-/// and is far above the same slide's without `small_sliding`.
+/// dish where they are now. That depth is reported, 4·10⁻³ (the frozen planes' gaps are
+/// 10⁻¹⁸, and the flanks of the node's frozen facet, out of reach, give 7·10⁻⁴), far above the
+/// same slide's without `small_sliding`.
 #[test]
 fn a_large_slide_with_small_sliding_reports_its_penetration() {
     let base = box_mesh([4.0, 1.0, 0.5], [32, 8, 2], ElementKind::Hex8);
@@ -1467,7 +1468,7 @@ fn a_large_slide_with_small_sliding_reports_its_penetration() {
     let (frozen, followed) = (penetration("small_sliding = true"), penetration(""));
     println!("small sliding {frozen:.3e}, sliding {followed:.3e}");
     assert!(
-        frozen > 1e-3 && frozen > 100.0 * followed,
+        frozen > 2e-3 && frozen > 100.0 * followed,
         "{frozen} against {followed}"
     );
 }
