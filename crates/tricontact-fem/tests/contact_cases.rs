@@ -84,6 +84,20 @@ fn neo_hooke_bodies(lower: f64, upper: f64) -> String {
     text
 }
 
+/// Supports: `lower_zmin` held; `upper_zmax` pressed down by `press` in the step "press", then
+/// moved by `slide` along x, still pressed, in the step "slide".
+fn press_and_slide(press: f64, slide: f64) -> String {
+    let mut text =
+        "[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n".to_string();
+    for (x, step) in [(0.0, "press"), (slide, "slide")] {
+        text += &format!(
+            "[[boundary]]\ngroup = \"upper_zmax\"\ndisplacement = {{ x = {x}, y = 0.0, z = {} }}\nsteps = [\"{step}\"]\n",
+            -press
+        );
+    }
+    text
+}
+
 /// Named `[[step]]` tables with `nlgeom`, of the given increments.
 fn nlgeom_steps(steps: &[(&str, usize)]) -> String {
     steps
@@ -1286,12 +1300,7 @@ fn a_block_slides_off_the_edge_of_the_base() {
     let mesh = tricontact_fem::structured::stack(&base, &block, [1.2, 0.2, 0.5]);
     for method in ["multiplier", "augmented"] {
         let mut text = neo_hooke_bodies(1000.0, 100.0);
-        text += "[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n";
-        for (x, step) in [(0.0, "press"), (0.6, "slide")] {
-            text += &format!(
-                "[[boundary]]\ngroup = \"upper_zmax\"\ndisplacement = {{ x = {x}, y = 0.0, z = -0.02 }}\nsteps = [\"{step}\"]\n"
-            );
-        }
+        text += &press_and_slide(0.02, 0.6);
         text += &contact(method, "");
         text += &nlgeom_steps(&[("press", 2), ("slide", 12)]);
         let an = common::analysis(mesh.clone(), &text);
@@ -1450,12 +1459,7 @@ fn a_large_slide_with_small_sliding_reports_its_penetration() {
     let block = box_mesh([0.5, 0.5, 0.3], [4, 4, 2], ElementKind::Hex8);
     let mesh = tricontact_fem::structured::stack(&base, &block, [0.25, 0.25, 0.5]);
     let mut text = neo_hooke_bodies(1000.0, 1000.0);
-    text += "[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n";
-    for (x, step) in [(0.0, "press"), (2.0, "slide")] {
-        text += &format!(
-            "[[boundary]]\ngroup = \"upper_zmax\"\ndisplacement = {{ x = {x}, y = 0.0, z = -0.01 }}\nsteps = [\"{step}\"]\n"
-        );
-    }
+    text += &press_and_slide(0.01, 2.0);
     text += &nlgeom_steps(&[("press", 2), ("slide", 5)]);
     let penetration = |extra: &str| {
         let an = common::analysis(
