@@ -318,11 +318,7 @@ pub fn resolve(
     };
     mark_rigid(&sides.m_facets, in_body, rigid);
     // A rigid tool's nodes do not move against each other: they cannot poke between slave nodes.
-    let rigid_master = sides
-        .m_facets
-        .iter()
-        .flatten()
-        .all(|&a| !in_body[a as usize]);
+    let rigid_master = is_rigid(&sides.m_facets, in_body);
     let e = youngs_modulus(
         mesh,
         bodies,
@@ -419,9 +415,8 @@ pub fn resolve(
 
 /// A one-pass pair with a deformable master whose slave surface's mean edge exceeds the
 /// master's by more than this is noted: one pass holds only the slave's nodes, and a master much
-/// finer than the slave passes
-/// between them (a coarse block on a master ten times finer stopped at a fifth of its load with
-/// nodes "gone through"; two passes held it).
+/// finer than the slave passes between them (a coarse block on a master ten times finer stopped
+/// at a fifth of its load with nodes "gone through"; two passes held it).
 const COARSE_SLAVE: f64 = 2.0;
 
 /// `true` when the slave nodes and the master facets' nodes all lie on one part of the mesh
@@ -539,6 +534,11 @@ fn sides(
         s_tags,
         slaves,
     })
+}
+
+/// `true` when no node of the master `facets` belongs to a body: a rigid tool.
+fn is_rigid(facets: &[[u32; 3]], in_body: &[bool]) -> bool {
+    facets.iter().flatten().all(|&a| !in_body[a as usize])
 }
 
 /// Marks the nodes of the master `facets` that belong to no body as rigid (they must be fully
@@ -800,11 +800,7 @@ fn initial_penetrations(
     let mut moves = Vec::new();
     // A rigid master keeps the mesh's node order: count the slave nodes whose facet's normal
     // points the way the slave surface's outward normal does (into the slave body).
-    let rigid_master = surface
-        .facets()
-        .iter()
-        .flatten()
-        .all(|&a| !in_body[a as usize]);
+    let rigid_master = is_rigid(surface.facets(), in_body);
     let slave_normals = outward_normals(&x, s_facets);
     let (mut facing, mut away) = (0usize, 0usize);
     for &a in slaves {
