@@ -11,7 +11,32 @@ use nalgebra::{Matrix6, SymmetricEigen};
 
 use crate::analysis::Analysis;
 
-fn find(parent: &mut [usize], mut a: usize) -> usize {
+/// The parts of a mesh of `n` nodes linked through the elements whose node lists `elements`
+/// gives: each node's union-find parent (its part is [`find`] of it) and whether it belongs to
+/// an element at all.
+pub(crate) fn parts<'a>(
+    n: usize,
+    elements: impl Iterator<Item = &'a [usize]>,
+) -> (Vec<usize>, Vec<bool>) {
+    let mut parent: Vec<usize> = (0..n).collect();
+    let mut in_element = vec![false; n];
+    for nodes in elements {
+        for &a in nodes {
+            in_element[a] = true;
+        }
+        let r0 = find(&mut parent, nodes[0]);
+        for &a in &nodes[1..] {
+            let r = find(&mut parent, a);
+            if r != r0 {
+                parent[r] = r0;
+            }
+        }
+    }
+    (parent, in_element)
+}
+
+/// The root of `a`'s part (path halving).
+pub(crate) fn find(parent: &mut [usize], mut a: usize) -> usize {
     while parent[a] != a {
         parent[a] = parent[parent[a]];
         a = parent[a];
@@ -55,21 +80,11 @@ pub fn check_supports_with(
         3 * n,
         "check_supports: one prescribed flag per nodal DOF (3 per node)"
     );
-    let mut parent: Vec<usize> = (0..n).collect();
-    let mut in_element = vec![false; n];
-    for be in &an.body {
-        let nodes = &an.mesh.elements[be.element].nodes;
-        for &a in nodes {
-            in_element[a] = true;
-        }
-        let r0 = find(&mut parent, nodes[0]);
-        for &a in &nodes[1..] {
-            let r = find(&mut parent, a);
-            if r != r0 {
-                parent[r] = r0;
-            }
-        }
-    }
+    let elements = an
+        .body
+        .iter()
+        .map(|be| an.mesh.elements[be.element].nodes.as_slice());
+    let (mut parent, in_element) = parts(n, elements);
     let mut comps: std::collections::BTreeMap<usize, Vec<usize>> =
         std::collections::BTreeMap::new();
     for a in 0..n {

@@ -23,9 +23,9 @@ use tricontact::search::{Bvh, Query, Surface};
 use tricontact::{NodeFacet, Vec3};
 
 /// The largest `−P_G` over the facets `G` near node `s` (within twice `facet`'s size plus the
-/// node's gap, and within `radius`), concave to `facet`, that
-/// the node lies behind with its foot within [`LOST_TOLERANCE`] of `G`, at positions `x` (`bvh`
-/// built on them); `0` when there is none.
+/// node's gap, and within `radius`), concave to `facet`, that the node lies behind with its foot
+/// within [`LOST_TOLERANCE`] of `G`, at positions `x` (`bvh` built on them); `0` when there is
+/// none.
 #[must_use]
 pub fn flank_penetration(
     surface: &Surface,
@@ -34,53 +34,45 @@ pub fn flank_penetration(
     (s, facet): (usize, u32),
     radius: f64,
 ) -> f64 {
-    let corners = |f: u32| surface.facets()[f as usize];
-    let f_nodes = corners(facet);
-    let Ok(f_pair) = NodeFacet::new(
-        x[f_nodes[0] as usize],
-        x[f_nodes[1] as usize],
-        x[f_nodes[2] as usize],
-        x[s],
-    ) else {
+    let nodes = |f: u32| surface.facets()[f as usize];
+    let pair_with = |f: u32| {
+        let [a, b, c] = surface.corners(f, x);
+        NodeFacet::new(a, b, c, x[s]).ok()
+    };
+    let Some(f_pair) = pair_with(facet) else {
         return 0.0;
     };
+    let f_nodes = nodes(facet);
     let margin = 1e-9 * f_pair.facet.size();
+    // The corners of `other` not shared with `own` lie in front of `own`'s plane (within the
+    // margin), at least one beyond it: the whole of `other` is in front of `own`.
+    let rises = |pair: &NodeFacet, own: &[u32; 3], other: &[u32; 3]| {
+        let heights = other
+            .iter()
+            .filter(|a| !own.contains(a))
+            .map(|&a| (x[a as usize] - pair.facet.nodes()[0]).dot(&pair.facet.normal()));
+        let (low, high) = heights.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), z| {
+            (l.min(z), h.max(z))
+        });
+        low >= -margin && high > margin
+    };
     let reach = (2.0 * f_pair.facet.size() + f_pair.gap().abs()).min(radius);
-    let mut deepest = 0.0f64;
     let query = Query {
         point: x[s],
         exclude: u32::try_from(s).ok(),
     };
+    let mut deepest = 0.0f64;
     for hit in bvh.within(surface, &query, reach) {
         let g = hit.facet;
-        let g_nodes = corners(g);
         if g == facet {
             continue;
         }
-        let Ok(g_pair) = NodeFacet::new(
-            x[g_nodes[0] as usize],
-            x[g_nodes[1] as usize],
-            x[g_nodes[2] as usize],
-            x[s],
-        ) else {
+        let Some(g_pair) = pair_with(g) else {
             continue;
         };
-        if !(g_pair.gap() < 0.0 && g_pair.projection.is_inside(LOST_TOLERANCE)) {
-            continue;
-        }
-        // The corners of `other` not shared with `own` lie in front of `own`'s plane (within
-        // the margin), at least one beyond it: the whole of `other` is in front of `own`.
-        let rises = |pair: &NodeFacet, own: &[u32; 3], other: &[u32; 3]| {
-            let heights = other
-                .iter()
-                .filter(|a| !own.contains(a))
-                .map(|&a| (x[a as usize] - pair.facet.nodes()[0]).dot(&pair.facet.normal()));
-            let (low, high) = heights.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), z| {
-                (l.min(z), h.max(z))
-            });
-            low >= -margin && high > margin
-        };
-        if rises(&f_pair, &f_nodes, &g_nodes) && rises(&g_pair, &g_nodes, &f_nodes) {
+        let behind = g_pair.gap() < 0.0 && g_pair.projection.is_inside(LOST_TOLERANCE);
+        let g_nodes = nodes(g);
+        if behind && rises(&f_pair, &f_nodes, &g_nodes) && rises(&g_pair, &g_nodes, &f_nodes) {
             deepest = deepest.max(-g_pair.gap());
         }
     }

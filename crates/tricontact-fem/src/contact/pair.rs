@@ -36,6 +36,7 @@ use tricontact::search::{Bvh, Surface};
 use crate::loads::{node_to_elements, outward_faces};
 use crate::mesh::{Element, ElementKind, Group, Mesh};
 use crate::model::{ContactDef, ContactMethod};
+use crate::rigid::{find, parts};
 
 /// One search pass: slave nodes against the facets of a surface.
 #[derive(Clone, Debug)]
@@ -423,23 +424,7 @@ const COARSE_SLAVE: f64 = 2.0;
 /// (nodes linked through body elements): a self-contact pair, or two groups of one body named by
 /// mistake. A master of no body element (a rigid tool) is a part of its own.
 fn one_part(nodes: usize, elements: &[&Element], slaves: &[usize], facets: &[[u32; 3]]) -> bool {
-    let mut parent: Vec<usize> = (0..nodes).collect();
-    fn root(parent: &mut [usize], mut a: usize) -> usize {
-        while parent[a] != a {
-            parent[a] = parent[parent[a]];
-            a = parent[a];
-        }
-        a
-    }
-    let mut in_element = vec![false; nodes];
-    for e in elements {
-        let r = root(&mut parent, e.nodes[0]);
-        for &a in &e.nodes {
-            in_element[a] = true;
-            let ra = root(&mut parent, a);
-            parent[ra] = r;
-        }
-    }
+    let (mut parent, in_element) = parts(nodes, elements.iter().map(|e| e.nodes.as_slice()));
     let mut all = slaves
         .iter()
         .copied()
@@ -447,8 +432,8 @@ fn one_part(nodes: usize, elements: &[&Element], slaves: &[usize], facets: &[[u3
     let Some(first) = all.next() else {
         return false;
     };
-    let part = root(&mut parent, first);
-    in_element[first] && all.all(|a| in_element[a] && root(&mut parent, a) == part)
+    let part = find(&mut parent, first);
+    in_element[first] && all.all(|a| in_element[a] && find(&mut parent, a) == part)
 }
 
 /// The two sides of a pair as the mesh gives them: the master group, its oriented facets and
