@@ -22,8 +22,8 @@
 //!
 //! The predictor of an increment is not searched: it also moves the prescribed degrees of freedom
 //! to their targets, and shortening only its free part strains the elements next to them (in the
-//! `contact-block` example with a penalty that inverted elements and cost two cutbacks; searching
-//! only the corrections cost none).
+//! `contact-block` example with a penalty of the base's modulus, then the default, that inverted
+//! elements and cost two cutbacks; searching only the corrections cost none).
 //!
 //! Each trial is a full evaluation: contact statuses and facets are decided again at the trial
 //! point, and a status change there counts towards the node's switches (see

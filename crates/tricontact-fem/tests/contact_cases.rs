@@ -301,7 +301,9 @@ displacement = {{ x = 0.0, y = 0.0, z = -0.2 }}
 [[step]]
 increments = {increments}
 "#,
-        contact(method, "")
+        // The base's own `10 E h` (h the mean edge of its top's facets): the default takes the
+        // softer block's modulus, a hundred times smaller, and this case is about a stiff base.
+        contact(method, "penalty = 9.48e4")
     );
     let an = common::analysis(mesh, &text);
     let mut terms = ContactTerms::new(&an);
@@ -924,14 +926,19 @@ fn a_rigid_master_facing_away_from_the_slave_is_rejected() {
 }
 
 /// The `contact-block` example with the block pressed down by `depth` (its model's `-0.05`) and
-/// contact enforced by `method`.
+/// contact enforced by `method`, with the penalty `10 E h` of the base's modulus (2845.2, ten
+/// times the default, which takes the softer block's: with the default, the penalty runs below
+/// need no line search).
 fn pressed_block(depth: &str, method: &str) -> Analysis {
     let folder =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/contact-block");
     let text = std::fs::read_to_string(folder.join("model.toml"))
         .expect("text")
         .replace("z = -0.05", &format!("z = -{depth}"))
-        .replace("method = \"multiplier\"", &format!("method = \"{method}\""));
+        .replace(
+            "method = \"multiplier\"",
+            &format!("method = \"{method}\"\npenalty = 2845.2"),
+        );
     let model = Model::parse(&text, &folder.join("model.toml")).expect("model");
     let mesh = tricontact_fem::gmsh::read_msh(&folder.join("blocks.msh")).expect("mesh");
     Analysis::new(&model, mesh).expect("analysis")
@@ -1363,8 +1370,10 @@ fn penetration_behind_the_other_flank_of_a_corner_is_reported() {
         "[[boundary]]\ngroup = \"upper_zmax\"\ndisplacement = { x = -0.02, y = 0.0, z = -0.02 }\n";
     text += &nlgeom_steps(&[("press", 4)]);
     for method in ["penalty", "multiplier"] {
+        // About the stiff side's `10 E h` (the default takes the soft cube's modulus, ten
+        // times smaller, and the constrained gaps would be as many times larger).
         let pair = format!(
-            "[[contact]]\nslave = \"cube_contact\"\nmaster = \"corner\"\nmethod = \"{method}\"\n"
+            "[[contact]]\nslave = \"cube_contact\"\nmaster = \"corner\"\nmethod = \"{method}\"\npenalty = 1745.0\n"
         );
         let an = common::analysis(mesh.clone(), &format!("{text}{pair}"));
         let (terms, records, _) = common::solve_contact(&an);
@@ -1384,6 +1393,31 @@ fn penetration_behind_the_other_flank_of_a_corner_is_reported() {
         assert!(
             reported > 3e-3 && reported > 10.0 * gap,
             "{method}: reported {reported}, gap {gap}"
+        );
+    }
+}
+
+/// The default penalty `10 E h` takes the softer side's modulus, whichever side it is on, and a
+/// model whose sides share one modulus keeps it: the stiffer side's made the springs as many
+/// times stiffer than the soft side's elements (README, "The default penalty").
+#[test]
+fn the_default_penalty_takes_the_softer_sides_modulus() {
+    for (lower, upper, softer) in [
+        (1000.0, 100.0, 100.0),
+        (100.0, 1000.0, 100.0),
+        (250.0, 250.0, 250.0),
+    ] {
+        let mut text = neo_hooke_bodies(lower, upper);
+        text += &press_and_slide(0.01, 0.0);
+        text += &contact("penalty", "");
+        text += &nlgeom_steps(&[("press", 1), ("slide", 1)]);
+        let an = common::analysis(patch_blocks(2), &text);
+        let pair = &an.contacts[0];
+        let expected = 10.0 * softer * pair.facet_size;
+        assert!(
+            (pair.penalty - expected).abs() <= 1e-12 * expected,
+            "master E {lower}, slave E {upper}: penalty {} against {expected}",
+            pair.penalty
         );
     }
 }

@@ -296,7 +296,7 @@ fn contact_block_in_other_units_gives_the_same_forces() {
         (f_m - f_mm).abs() <= 1e-6 * f_mm,
         "{f_mm} N against {f_m} N"
     );
-    // The largest penetration (a node's depth behind the next flank of the dish, 1.5·10⁻⁴ mm)
+    // The largest penetration (a node's depth behind the next flank of the dish, 4.1·10⁻⁶ mm)
     // is a length of the model: it scales with the unit.
     assert!(
         (pen_m - 1e-3 * pen_mm).abs() <= 1e-3 * 1e-3 * pen_mm,

@@ -12,10 +12,13 @@
 //! normals); otherwise the model is rejected naming the faces.
 //!
 //! # Default penalty
-//! `α = 10 E h`, with `E` Young's modulus of the body the first master face bounds (of the slave
-//! body for a rigid master) and `h` the mean edge length of the master facets: the penalty spring
-//! of a node is about ten times the stiffness of an element of size `h`, so the penetration under
-//! a contact pressure `p` is about `0.1 h p / E` per node.
+//! `α = 10 E h`, with `E` the smaller of the Young's moduli of the body the first master face
+//! bounds and of the body of the first slave node (the slave body's for a rigid master) and `h`
+//! the mean edge length of the master facets: the penalty spring of a node is about ten times the
+//! stiffness of an element of size `h` of the softer side, so the penetration under a contact
+//! pressure `p` is about `0.1 h p / E` per node. The stiffer side's modulus would make the springs
+//! as many times stiffer than the soft side's elements, which costs Newton iterations and
+//! cutbacks (measured in the README, "The default penalty").
 //!
 //! A given `penalty` below 10⁻² or above 10⁴ times that default ([`PENALTY_NOTE_RANGE`]) is
 //! reported (not refused): such a factor most often comes from a modulus or a length in other
@@ -601,9 +604,10 @@ fn penalty_note(
     ))
 }
 
-/// Young's modulus for the default penalty: that of the element bounded by the first of
-/// `master_faces` that bounds a body element; else (a rigid master) that of the first slave
-/// node's first element; else 1.
+/// Young's modulus for the default penalty (see the module documentation): the smaller of the
+/// master's (that of the element bounded by the first of `master_faces` that bounds a body
+/// element) and the slave's (that of the first slave node's first element); the one there is for
+/// a rigid master; else 1.
 fn youngs_modulus(
     mesh: &Mesh,
     bodies: &Bodies<'_>,
@@ -621,7 +625,10 @@ fn youngs_modulus(
     let slave_e = slaves
         .first()
         .and_then(|&a| node_elems[a].first().map(|&e| bodies.youngs[e]));
-    master_e.or(slave_e).unwrap_or(1.0)
+    match (master_e, slave_e) {
+        (Some(m), Some(s)) => m.min(s),
+        (m, s) => m.or(s).unwrap_or(1.0),
+    }
 }
 
 /// One search pass against `surface` (from faces of Gmsh tags `face_tags`, search radius
