@@ -599,8 +599,9 @@ fn cut_back(
     let hint = failure_hint(&failure, extra, problem.dm);
     extra.restore();
     if let (Failure::Singular(m), false) = (&failure, step.nlgeom) {
+        let gap = open_gap_hint(problem, t);
         return Err(FemError::Singular(format!(
-            "step '{}': {m}{hint}",
+            "step '{}': {m}{hint}{gap}",
             step.name
         )));
     }
@@ -613,14 +614,30 @@ fn cut_back(
         return Ok(());
     }
     let search_hint = line_search_hint(&failure, step, problem.line_search_applies(extra));
+    let gap = open_gap_hint(problem, t);
     Err(FemError::NotConverged {
         step: step.name.clone(),
         load_factor: t,
         target: t_new,
-        reason: format!("{failure}{hint}{search_hint}"),
+        reason: format!("{failure}{hint}{search_hint}{gap}"),
         exhausted: control.exhausted(),
         attempts: std::mem::take(attempts),
     })
+}
+
+/// What to add to the reason of a first step that fails before its first increment converged
+/// (at load factor `t = 0`): the body part only contact across a gap holds, if any
+/// ([`Analysis::open_gap_support`]).
+fn open_gap_hint(problem: &IncrementProblem<'_>, t: f64) -> String {
+    let first = problem
+        .an
+        .steps
+        .first()
+        .is_some_and(|s| std::ptr::eq(s, problem.step));
+    match (first && t == 0.0).then(|| problem.an.open_gap_support()) {
+        Some(Some(gap)) => gap.hint(),
+        _ => String::new(),
+    }
 }
 
 /// What to add to a failure's reason: for a singular tangent with extra unknowns

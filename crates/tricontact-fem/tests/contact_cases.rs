@@ -1422,6 +1422,47 @@ fn the_default_penalty_takes_the_softer_sides_modulus() {
     }
 }
 
+/// A block over a base, held at its top in x and y and pushed down by a force: with a gap between
+/// them nothing holds it in z (nor turning about its top's plane) until contact closes, and the
+/// first increment failed with "element inverted" and no word on the gap. `check` and `run` now
+/// note the part and the gap, and the failure names them; starting in touch there is no note and
+/// the run finishes.
+#[test]
+fn a_force_on_a_block_over_a_gap_is_explained() {
+    let base = box_mesh([1.0, 1.0, 0.3], [4, 4, 1], ElementKind::Hex8);
+    let block = box_mesh([0.5, 0.5, 0.3], [2, 2, 1], ElementKind::Hex8);
+    for gap in [0.05, 0.0] {
+        let mesh = tricontact_fem::structured::stack(&base, &block, [0.25, 0.25, 0.3 + gap]);
+        let mut text = neo_hooke_bodies(1000.0, 1000.0);
+        text += "[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n\
+                 [[boundary]]\ngroup = \"upper_zmax\"\nfix = [\"x\", \"y\"]\n\
+                 [[load]]\ngroup = \"upper_zmax\"\nforce = [0.0, 0.0, -1.0]\n";
+        text += &contact("penalty", "");
+        text += &nlgeom_steps(&[("press", 2)]);
+        let an = common::analysis(mesh, &text);
+        let notes = an.notes().join("\n");
+        let mut terms = ContactTerms::new(&an);
+        let run = tricontact_fem::driver::run(&an, &mut terms, &mut |_| Ok(()));
+        if gap > 0.0 {
+            assert!(
+                notes.contains("until contact closes")
+                    && notes.contains("unconstrained rigid-body mode")
+                    && notes.contains("is 5.000e-2 from the master"),
+                "{notes}"
+            );
+            let message = run.expect_err("nothing holds the block").to_string();
+            assert!(
+                message
+                    .contains("while contact 'upper_zmin-lower_zmax' is open (a gap of 5.000e-2"),
+                "{message}"
+            );
+        } else {
+            assert!(!notes.contains("until contact closes"), "{notes}");
+            run.expect("touching, the base holds the block");
+        }
+    }
+}
+
 /// A block pressed onto a plate one element thick, with multipliers, the master every face of
 /// the plate. A Newton step carried block nodes past the plate's mid-plane, where its bottom
 /// face is nearer than its top; constrained by the bottom, they were pushed on through the plate

@@ -123,6 +123,68 @@ pub const MAX_CUTBACKS: usize = 30;
 /// stay finite and nonzero.
 pub const MAX_MODULUS: f64 = 1e100;
 
+/// A body part of the first step that only contact across a gap holds (see
+/// [`Analysis::open_gap_support`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct OpenGap {
+    /// The first step's name.
+    pub step: String,
+    /// The part and its free rigid-body modes, as [`crate::rigid::check_supports`] names them.
+    pub free: String,
+    /// The pair of the slave node nearest the master among those apart from it.
+    pub pair: String,
+    /// That node's Gmsh tag.
+    pub node: u64,
+    /// Its gap at the start.
+    pub gap: f64,
+}
+
+impl OpenGap {
+    /// The note `check` and `run` print.
+    #[must_use]
+    pub fn note(&self) -> String {
+        format!(
+            "step '{}': with its boundaries and the slave nodes that touch the master at the \
+             start, {} until contact closes (the nearest other slave node of contact '{}', node \
+             {}, is {:.3e} from the master); a force or a pressure on it makes the first \
+             increment fail (an inverted element or a singular tangent): prescribe its motion \
+             until it touches (a first step), or start it touching",
+            self.step, self.free, self.pair, self.node, self.gap
+        )
+    }
+
+    /// What a first step that fails before its first increment adds to its message.
+    #[must_use]
+    pub fn hint(&self) -> String {
+        format!(
+            "; {} while contact '{}' is open (a gap of {:.3e} at node {}): prescribe its motion \
+             until it touches, or start it touching",
+            self.free, self.pair, self.gap, self.node
+        )
+    }
+}
+
+/// A slave node within reach of a master facet at the reference positions: its contact pair
+/// (index), the nodes of the facet it faces, that facet's normal and the gap `P`.
+struct Reach {
+    pair: usize,
+    slave: usize,
+    facet: [u32; 3],
+    normal: [f64; 3],
+    gap: f64,
+}
+
+/// `(node, normal)` for each slave node of `reach` that `keep` keeps, and for the nodes of the
+/// facet it faces: the directions frictionless contact holds them along.
+fn held_along(reach: &[Reach], keep: impl Fn(&Reach) -> bool) -> Vec<(usize, [f64; 3])> {
+    let mut held = Vec::new();
+    for r in reach.iter().filter(|r| keep(r)) {
+        held.push((r.slave, r.normal));
+        held.extend(r.facet.iter().map(|&a| (a as usize, r.normal)));
+    }
+    held
+}
+
 impl Analysis {
     /// Resolves and validates; fails with the single problem found or with
     /// [`FemError::Invalid`] listing all of them.
@@ -153,7 +215,9 @@ impl Analysis {
     /// pressures), and a body part whose rigid motion neither its boundaries nor the normals of
     /// its contacts hold (frictionless contact holds a slave node, and the facet it faces, only
     /// along the facet normal; the normals are those at the start, of slave nodes within reach of
-    /// a master facet). Without contact pairs such a body is an error, not a note.
+    /// a master facet). Without contact pairs such a body is an error, not a note. In the first
+    /// step, a body part that those normals hold only where the slave nodes are still apart from
+    /// the master is noted too ([`Analysis::open_gap_support`]).
     #[must_use]
     pub fn notes(&self) -> Vec<String> {
         let mut notes = self.model_notes.clone();
@@ -161,7 +225,8 @@ impl Analysis {
         if self.contacts.is_empty() {
             return notes;
         }
-        let held = self.initial_contact_normals();
+        let reach = self.initial_reach();
+        let held = held_along(&reach, |_| true);
         for (s, step) in self.steps.iter().enumerate() {
             let (mask, _) = crate::driver::step_constraints(self, s);
             if let Err(m) = crate::rigid::check_supports_with(self, &mask, &held) {
@@ -171,40 +236,90 @@ impl Analysis {
                     step.name,
                     m.trim_end_matches("; add supports")
                 ));
+            } else if s == 0 {
+                notes.extend(self.open_gap(&reach).map(|g| g.note()));
             }
         }
         notes
     }
 
-    /// `(node, normal)` for each slave node within reach of a master facet at the reference
-    /// positions, and for the nodes of that facet.
-    fn initial_contact_normals(&self) -> Vec<(usize, [f64; 3])> {
+    /// The first step's body part that only contact across a gap holds, if any: its boundaries
+    /// and the normals of the slave nodes within reach of a master facet at the start hold it,
+    /// but not with the normals of the slave nodes touching the master alone (a gap within the
+    /// pair's `tolerance`). Nothing holds it until the gap closes, and the first increment's
+    /// tangent is singular for it: Newton then fails on an inverted element or a singular
+    /// tangent, which names neither the part nor the gap. A note of `check` and `run`
+    /// ([`OpenGap::note`]), and a hint in the message of a first step that fails before its
+    /// first increment ([`OpenGap::hint`]).
+    #[must_use]
+    pub fn open_gap_support(&self) -> Option<OpenGap> {
+        if self.contacts.is_empty() || self.steps.is_empty() {
+            return None;
+        }
+        self.open_gap(&self.initial_reach())
+    }
+
+    /// [`Analysis::open_gap_support`] from the slave nodes within reach at the start.
+    fn open_gap(&self, reach: &[Reach]) -> Option<OpenGap> {
+        let (mask, _) = crate::driver::step_constraints(self, 0);
+        let touching = |r: &Reach| r.gap <= self.contacts[r.pair].tolerance;
+        if crate::rigid::check_supports_with(self, &mask, &held_along(reach, |_| true)).is_err() {
+            return None;
+        }
+        let free =
+            crate::rigid::check_supports_with(self, &mask, &held_along(reach, touching)).err()?;
+        let nearest = reach
+            .iter()
+            .filter(|r| !touching(r))
+            .min_by(|a, b| a.gap.total_cmp(&b.gap))?;
+        Some(OpenGap {
+            step: self.steps[0].name.clone(),
+            free: free.trim_end_matches("; add supports").to_string(),
+            pair: self.contacts[nearest.pair].name.clone(),
+            node: self.mesh.node_tags[nearest.slave],
+            gap: nearest.gap,
+        })
+    }
+
+    /// Each slave node within reach of a master facet at the reference positions, with the
+    /// facet it faces (see [`tricontact::contact::choose_facet`]).
+    fn initial_reach(&self) -> Vec<Reach> {
         let x: Vec<tricontact::Vec3> = self
             .mesh
             .nodes
             .iter()
             .map(|p| tricontact::Vec3::new(p[0], p[1], p[2]))
             .collect();
-        let mut held = Vec::new();
-        for pass in self.contacts.iter().flat_map(|c| &c.passes) {
-            let Ok(bvh) = tricontact::search::Bvh::build(&pass.surface, &x, pass.radius) else {
-                continue;
-            };
-            for &s in &pass.slaves {
-                let Some((f, pair)) = u32::try_from(s).ok().and_then(|node| {
-                    tricontact::contact::choose_facet(&pass.surface, &bvh, &x, node, pass.radius)
-                }) else {
+        let mut reach = Vec::new();
+        for (c, pair) in self.contacts.iter().enumerate() {
+            for pass in &pair.passes {
+                let Ok(bvh) = tricontact::search::Bvh::build(&pass.surface, &x, pass.radius) else {
                     continue;
                 };
-                let w = pair.facet.normal();
-                let w = [w[0], w[1], w[2]];
-                held.push((s, w));
-                for a in pass.surface.facets()[f as usize] {
-                    held.push((a as usize, w));
+                for &s in &pass.slaves {
+                    let Some((f, nf)) = u32::try_from(s).ok().and_then(|node| {
+                        tricontact::contact::choose_facet(
+                            &pass.surface,
+                            &bvh,
+                            &x,
+                            node,
+                            pass.radius,
+                        )
+                    }) else {
+                        continue;
+                    };
+                    let w = nf.facet.normal();
+                    reach.push(Reach {
+                        pair: c,
+                        slave: s,
+                        facet: pass.surface.facets()[f as usize],
+                        normal: [w[0], w[1], w[2]],
+                        gap: nf.gap(),
+                    });
                 }
             }
         }
-        held
+        reach
     }
 
     fn line_search_notes(&self) -> Vec<String> {
