@@ -1425,29 +1425,31 @@ fn the_default_penalty_takes_the_softer_sides_modulus() {
 /// A block over a base, held at its top in x and y and pushed down by a force: with a gap between
 /// them nothing holds it in z (nor turning about its top's plane) until contact closes, and the
 /// first increment failed with "element inverted" and no word on the gap. `check` and `run` now
-/// note the part and the gap, and the failure names them; starting in touch there is no note and
-/// the run finishes.
+/// note the part and the gap, and the failure names them; starting in touch, or with the gap
+/// closed by `adjust` (which moved only penetrating nodes before), there is no note and the run
+/// finishes.
 #[test]
 fn a_force_on_a_block_over_a_gap_is_explained() {
     let base = box_mesh([1.0, 1.0, 0.3], [4, 4, 1], ElementKind::Hex8);
     let block = box_mesh([0.5, 0.5, 0.3], [2, 2, 1], ElementKind::Hex8);
-    for gap in [0.05, 0.0] {
+    for (gap, adjust) in [(0.05, ""), (0.0, ""), (0.05, "adjust = 0.06")] {
         let mesh = tricontact_fem::structured::stack(&base, &block, [0.25, 0.25, 0.3 + gap]);
         let mut text = neo_hooke_bodies(1000.0, 1000.0);
         text += "[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n\
                  [[boundary]]\ngroup = \"upper_zmax\"\nfix = [\"x\", \"y\"]\n\
                  [[load]]\ngroup = \"upper_zmax\"\nforce = [0.0, 0.0, -1.0]\n";
-        text += &contact("penalty", "");
+        text += &contact("penalty", adjust);
         text += &nlgeom_steps(&[("press", 2)]);
         let an = common::analysis(mesh, &text);
         let notes = an.notes().join("\n");
         let mut terms = ContactTerms::new(&an);
         let run = tricontact_fem::driver::run(&an, &mut terms, &mut |_| Ok(()));
-        if gap > 0.0 {
+        if gap > 0.0 && adjust.is_empty() {
             assert!(
                 notes.contains("until contact closes")
                     && notes.contains("unconstrained rigid-body mode")
-                    && notes.contains("is 5.000e-2 from the master"),
+                    && notes.contains("is 5.000e-2 from the master")
+                    && notes.contains("adjust = 5.000e-2"),
                 "{notes}"
             );
             let message = run.expect_err("nothing holds the block").to_string();
@@ -1457,8 +1459,20 @@ fn a_force_on_a_block_over_a_gap_is_explained() {
                 "{message}"
             );
         } else {
-            assert!(!notes.contains("until contact closes"), "{notes}");
+            assert!(
+                !notes.contains("until contact closes"),
+                "{gap} {adjust}: {notes}"
+            );
             run.expect("touching, the base holds the block");
+        }
+        if !adjust.is_empty() {
+            let report = an.contacts[0].report.join(" ");
+            assert!(
+                report.contains(
+                    "9 slave nodes moved onto the master surface (0 penetrating it, 9 apart from it"
+                ),
+                "{report}"
+            );
         }
     }
 }

@@ -148,8 +148,9 @@ impl OpenGap {
              start, {} until contact closes (the nearest other slave node of contact '{}', node \
              {}, is {:.3e} from the master); a force or a pressure on it makes the first \
              increment fail (an inverted element or a singular tangent): prescribe its motion \
-             until it touches (a first step), or start it touching",
-            self.step, self.free, self.pair, self.node, self.gap
+             until it touches (a first step), start it touching, or give the pair `adjust = \
+             {:.3e}` or more (slave nodes within it are moved onto the master)",
+            self.step, self.free, self.pair, self.node, self.gap, self.gap
         )
     }
 
@@ -158,7 +159,7 @@ impl OpenGap {
     pub fn hint(&self) -> String {
         format!(
             "; {} while contact '{}' is open (a gap of {:.3e} at node {}): prescribe its motion \
-             until it touches, or start it touching",
+             until it touches, start it touching, or give the pair `adjust`",
             self.free, self.pair, self.gap, self.node
         )
     }

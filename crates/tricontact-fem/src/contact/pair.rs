@@ -33,7 +33,7 @@
 use std::collections::HashMap;
 
 use tricontact::Vec3;
-use tricontact::contact::choose_facet;
+use tricontact::contact::{PROJECTION_TOLERANCE, choose_facet};
 use tricontact::search::{Bvh, Surface};
 
 use crate::loads::{node_to_elements, outward_faces};
@@ -770,8 +770,9 @@ struct Slaves<'a> {
     in_body: &'a [bool],
 }
 
-/// The slave nodes that start inside the master `surface`: those within `adjust` are moved onto
-/// it in `mesh`, the deeper ones are counted; returns what to report. A rigid master whose normals
+/// The slave nodes that start inside the master `surface` or near it: those within `adjust` of it
+/// (inside, or apart from it with their foot on a facet) are moved onto it in `mesh`, the deeper
+/// ones are counted; returns what to report. A rigid master whose normals
 /// point into the slave surface is refused. `(h_mean, h_max)`: the master's mean and longest
 /// edge (the search radius).
 fn initial_penetrations(
@@ -788,7 +789,8 @@ fn initial_penetrations(
     let x = positions(mesh);
     let bvh = Bvh::build(surface, &x, h_max).map_err(|e| vec![format!("{}{e}", at("master"))])?;
     let adjust = def.adjust.unwrap_or(0.0);
-    let (mut moved, mut deep, mut largest, mut worst) = (0usize, 0usize, 0.0f64, 0usize);
+    let (mut moved, mut closed, mut deep, mut largest, mut worst) =
+        (0usize, 0usize, 0usize, 0.0f64, 0usize);
     let mut moves = Vec::new();
     // A rigid master keeps the mesh's node order: count the slave nodes whose facet's normal
     // points the way the slave surface's outward normal does (into the slave body).
@@ -808,12 +810,15 @@ fn initial_penetrations(
             away += usize::from(cos > 0.5);
         }
         let p = pair.gap();
-        if p >= 0.0 {
-            continue;
-        }
-        if -p <= adjust {
+        // Within `adjust` on either side: onto the master, a node apart from it only where its
+        // foot is on the facet (not past the master's edge).
+        let near = p.abs() <= adjust
+            && p != 0.0
+            && (p < 0.0 || pair.projection.is_inside(PROJECTION_TOLERANCE));
+        if near {
             moves.push((a, -p * pair.facet.normal()));
-            moved += 1;
+            moved += usize::from(p < 0.0);
+            closed += usize::from(p > 0.0);
         } else if -p > 1e-12 * h_mean {
             deep += 1;
             if -p > largest {
@@ -835,9 +840,10 @@ fn initial_penetrations(
             mesh.nodes[a][i] += d[i];
         }
     }
-    if moved > 0 {
+    if moved + closed > 0 {
         report.push(format!(
-            "contact '{name}': {moved} slave nodes moved onto the master surface (adjust = {adjust:e})"
+            "contact '{name}': {} slave nodes moved onto the master surface ({moved} penetrating it, {closed} apart from it; adjust = {adjust:e})",
+            moved + closed
         ));
     }
     if deep > 0 {
