@@ -302,7 +302,7 @@ displacement = {{ x = 0.0, y = 0.0, z = -0.2 }}
 increments = {increments}
 "#,
         // The base's own `10 E h` (h the mean edge of its top's facets): the default takes the
-        // softer block's modulus, a hundred times smaller, and this case is about a stiff base.
+        // geometric mean of the moduli, ten times smaller, and this case is about a stiff base.
         contact(method, "penalty = 9.48e4")
     );
     let an = common::analysis(mesh, &text);
@@ -926,9 +926,9 @@ fn a_rigid_master_facing_away_from_the_slave_is_rejected() {
 }
 
 /// The `contact-block` example with the block pressed down by `depth` (its model's `-0.05`) and
-/// contact enforced by `method`, with the penalty `10 E h` of the base's modulus (2845.2, ten
-/// times the default, which takes the softer block's: with the default, the penalty runs below
-/// need no line search).
+/// contact enforced by `method`, with the penalty `10 E h` of the base's modulus (2845.2, √10
+/// times the default, which takes the geometric mean of the block's and the base's: with the
+/// default, the penalty runs below need no line search).
 fn pressed_block(depth: &str, method: &str) -> Analysis {
     let folder =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/contact-block");
@@ -1370,8 +1370,8 @@ fn penetration_behind_the_other_flank_of_a_corner_is_reported() {
         "[[boundary]]\ngroup = \"upper_zmax\"\ndisplacement = { x = -0.02, y = 0.0, z = -0.02 }\n";
     text += &nlgeom_steps(&[("press", 4)]);
     for method in ["penalty", "multiplier"] {
-        // About the stiff side's `10 E h` (the default takes the soft cube's modulus, ten
-        // times smaller, and the constrained gaps would be as many times larger).
+        // About the stiff side's `10 E h` (the default takes the geometric mean of the moduli,
+        // √10 times smaller, and the constrained gaps would be as many times larger).
         let pair = format!(
             "[[contact]]\nslave = \"cube_contact\"\nmaster = \"corner\"\nmethod = \"{method}\"\npenalty = 1745.0\n"
         );
@@ -1397,14 +1397,15 @@ fn penetration_behind_the_other_flank_of_a_corner_is_reported() {
     }
 }
 
-/// The default penalty `10 E h` takes the softer side's modulus, whichever side it is on, and a
-/// model whose sides share one modulus keeps it: the stiffer side's made the springs as many
-/// times stiffer than the soft side's elements (README, "The default penalty").
+/// The default penalty `10 E h` takes the geometric mean of the two sides' moduli, whichever
+/// side is the stiffer, and a model whose sides share one modulus keeps it: the master's alone
+/// made the springs as many times stiffer than a softer slave's elements (README, "The default
+/// penalty").
 #[test]
-fn the_default_penalty_takes_the_softer_sides_modulus() {
-    for (lower, upper, softer) in [
-        (1000.0, 100.0, 100.0),
-        (100.0, 1000.0, 100.0),
+fn the_default_penalty_takes_the_geometric_mean_of_the_moduli() {
+    for (lower, upper, mean) in [
+        (1000.0, 10.0, 100.0),
+        (10.0, 1000.0, 100.0),
         (250.0, 250.0, 250.0),
     ] {
         let mut text = neo_hooke_bodies(lower, upper);
@@ -1413,7 +1414,7 @@ fn the_default_penalty_takes_the_softer_sides_modulus() {
         text += &nlgeom_steps(&[("press", 1), ("slide", 1)]);
         let an = common::analysis(patch_blocks(2), &text);
         let pair = &an.contacts[0];
-        let expected = 10.0 * softer * pair.facet_size;
+        let expected = 10.0 * mean * pair.facet_size;
         assert!(
             (pair.penalty - expected).abs() <= 1e-12 * expected,
             "master E {lower}, slave E {upper}: penalty {} against {expected}",

@@ -12,13 +12,16 @@
 //! normals); otherwise the model is rejected naming the faces.
 //!
 //! # Default penalty
-//! `α = 10 E h`, with `E` the smaller of the Young's moduli of the body the first master face
-//! bounds and of the body of the first slave node (the slave body's for a rigid master) and `h`
-//! the mean edge length of the master facets: the penalty spring of a node is about ten times the
-//! stiffness of an element of size `h` of the softer side, so the penetration under a contact
-//! pressure `p` is about `0.1 h p / E` per node. The stiffer side's modulus would make the springs
-//! as many times stiffer than the soft side's elements, which costs Newton iterations and
-//! cutbacks (measured in the README, "The default penalty").
+//! `α = 10 E h`, with `E = √(E_m E_s)` the geometric mean of the Young's moduli of the body the
+//! first master face bounds and of the body of the first slave node (the slave body's for a rigid
+//! master) and `h` the mean edge length of the master facets: the penalty spring of a node is
+//! about ten times the stiffness of an element of size `h` of a body of modulus `E`, so the
+//! penetration under a contact pressure `p` is about `0.1 h p / E` per node. Between bodies of
+//! different moduli the springs are then as many times stiffer than the soft side's elements as
+//! they are softer than the stiff side's. The master's modulus alone (the default until
+//! 2026-12-05) made them stiffer than a softer slave's elements by the whole ratio, which cost
+//! Newton iterations and cutbacks; the smaller modulus alone costs penalty runs accuracy and an
+//! unloading augmented run cutbacks (measured in the README, "The default penalty").
 //!
 //! A given `penalty` below 10⁻² or above 10⁴ times that default ([`PENALTY_NOTE_RANGE`]) is
 //! reported (not refused): such a factor most often comes from a modulus or a length in other
@@ -604,8 +607,8 @@ fn penalty_note(
     ))
 }
 
-/// Young's modulus for the default penalty (see the module documentation): the smaller of the
-/// master's (that of the element bounded by the first of `master_faces` that bounds a body
+/// Young's modulus for the default penalty (see the module documentation): the geometric mean of
+/// the master's (that of the element bounded by the first of `master_faces` that bounds a body
 /// element) and the slave's (that of the first slave node's first element); the one there is for
 /// a rigid master; else 1.
 fn youngs_modulus(
@@ -626,7 +629,7 @@ fn youngs_modulus(
         .first()
         .and_then(|&a| node_elems[a].first().map(|&e| bodies.youngs[e]));
     match (master_e, slave_e) {
-        (Some(m), Some(s)) => m.min(s),
+        (Some(m), Some(s)) => (m * s).sqrt(),
         (m, s) => m.or(s).unwrap_or(1.0),
     }
 }
