@@ -4,7 +4,8 @@
 # (E = √(E_m E_s), the geometric mean of the master's and the slave's moduli) and with the penalty
 # given as `10 E h` of the master's modulus (the default until 2026-12-05) and of the smaller
 # modulus; `h` is each pair's mean master facet edge as `tricontact check` prints it. Prints one
-# line per run: the last line of the run, and the pair's normal force. About 12 minutes on two
+# line per run: its last line (increments, iterations, cutbacks, or the error), and the normal
+# force of the model's last pair at its end. About 12 minutes on two
 # cores (the hump runs take most of it).
 #   sh scripts/default-penalty.sh
 set -e
@@ -23,9 +24,11 @@ run() {
     { print }
     /^method = / { k++; if (k <= n && p[k] != "default") print "penalty = " p[k] }' \
     "$model" > "$dir/study.tmp"
-  line=$($bin run "$dir/study.tmp" --output "$out/$name" 2>&1 | tail -n 2 | tr '\n' ' ')
+  tail=$($bin run "$dir/study.tmp" --output "$out/$name" 2>&1 | tail -n 2)
   rm -f "$dir/study.tmp"
-  echo "$name: $line"
+  force=$(echo "$tail" | sed -n 's/.*normal force \([^,]*\),.*/\1/p' | tail -n 1)
+  last=$(echo "$tail" | tail -n 1 | sed 's/; results in.*//' | cut -c1-160)
+  echo "$name: $last${force:+; normal force $force}"
 }
 
 s=examples/penalty-study
