@@ -3,7 +3,8 @@
 # of examples/penalty-study/ and examples/contact-block/ is run with the default `10 E h`
 # (E = √(E_m E_s), the geometric mean of the master's and the slave's moduli) and with the penalty
 # given as `10 E h` of the master's modulus (the default until 2026-12-05) and of the smaller
-# modulus; `h` is each pair's mean master facet edge as `tricontact check` prints it. Prints one
+# modulus: the values written below, with `h` each pair's mean master facet edge as
+# `tricontact check MODEL` prints it (to four digits). Prints one
 # line per run: its last line (increments, iterations, cutbacks, or the error), and the normal
 # force of the model's last pair at its end. About 12 minutes on two
 # cores (the hump runs take most of it).
@@ -12,7 +13,9 @@ set -e
 cargo build --release -p tricontact-cli
 bin=./target/release/tricontact
 out=$(mktemp -d)
-trap 'rm -rf "$out"' EXIT
+cleanup() { rm -rf "$out" examples/*/study*.tmp examples/contact-block/study-*.toml; }
+trap cleanup EXIT
+trap 'cleanup; exit 1' INT TERM
 
 # run NAME MODEL PENALTY... : the model with `penalty = P` after the `method` line of its k-th
 # [[contact]] for the k-th P ("default": none).

@@ -626,7 +626,7 @@ fn cut_back(
 }
 
 /// What to add to the reason of a first step that fails before its first increment converged
-/// (at load factor `t = 0`): the body part only contact across a gap holds, if any
+/// (at load factor `t = 0`): the body parts only contact across a gap holds, if any
 /// ([`Analysis::open_gap_support`]).
 fn open_gap_hint(problem: &IncrementProblem<'_>, t: f64) -> String {
     let first = problem
@@ -634,9 +634,15 @@ fn open_gap_hint(problem: &IncrementProblem<'_>, t: f64) -> String {
         .steps
         .first()
         .is_some_and(|s| std::ptr::eq(s, problem.step));
-    match (first && t == 0.0).then(|| problem.an.open_gap_support()) {
-        Some(Some(gap)) => gap.hint(),
-        _ => String::new(),
+    if first && t == 0.0 {
+        problem
+            .an
+            .open_gap_support()
+            .iter()
+            .map(crate::analysis::OpenGap::hint)
+            .collect()
+    } else {
+        String::new()
     }
 }
 

@@ -69,6 +69,22 @@ pub fn check_supports_with(
     prescribed: &[bool],
     held: &[(usize, [f64; 3])],
 ) -> Result<(), String> {
+    match free_parts(an, prescribed, held).into_iter().next() {
+        Some((_, m)) => Err(m),
+        None => Ok(()),
+    }
+}
+
+/// Every body component that the `prescribed` DOFs and the `held` directions leave with a free
+/// rigid-body mode: its nodes and the description [`check_supports_with`] gives.
+///
+/// # Panics
+/// As [`check_supports_with`].
+pub(crate) fn free_parts(
+    an: &Analysis,
+    prescribed: &[bool],
+    held: &[(usize, [f64; 3])],
+) -> Vec<(Vec<usize>, String)> {
     let mut directions: std::collections::HashMap<usize, Vec<[f64; 3]>> =
         std::collections::HashMap::new();
     for &(a, d) in held {
@@ -93,15 +109,16 @@ pub fn check_supports_with(
             comps.entry(r).or_default().push(a);
         }
     }
-    for nodes in comps.values() {
+    let mut free_parts = Vec::new();
+    for nodes in comps.into_values() {
         let mut c = [0.0; 3];
-        for &a in nodes {
+        for &a in &nodes {
             for i in 0..3 {
                 c[i] += an.mesh.nodes[a][i] / nodes.len() as f64;
             }
         }
         let mut l = 0.0f64;
-        for &a in nodes {
+        for &a in &nodes {
             for i in 0..3 {
                 l = l.max((an.mesh.nodes[a][i] - c[i]).abs());
             }
@@ -111,7 +128,7 @@ pub fn check_supports_with(
         // modes the part does not have at all (rotations of a lone node, as the nodes of a rigid
         // master without elements are).
         let (mut g, mut g_all) = (Matrix6::<f64>::zeros(), Matrix6::<f64>::zeros());
-        for &a in nodes {
+        for &a in &nodes {
             let x = [
                 (an.mesh.nodes[a][0] - c[0]) / l,
                 (an.mesh.nodes[a][1] - c[1]) / l,
@@ -137,12 +154,12 @@ pub fn check_supports_with(
             } else {
                 format!("node {tag} of a rigid contact surface (no volume element)")
             };
-            return Err(format!(
-                "{part} has {free} unconstrained rigid-body mode(s); add supports"
-            ));
+            let message =
+                format!("{part} has {free} unconstrained rigid-body mode(s); add supports");
+            free_parts.push((nodes, message));
         }
     }
-    Ok(())
+    free_parts
 }
 
 /// The unit vector along axis `i`.

@@ -1426,14 +1426,15 @@ fn the_default_penalty_takes_the_geometric_mean_of_the_moduli() {
 /// A block over a base, held at its top in x and y and pushed down by a force: with a gap between
 /// them nothing holds it in z (nor turning about its top's plane) until contact closes, and the
 /// first increment failed with "element inverted" and no word on the gap. `check` and `run` now
-/// note the part and the gap, and the failure names them; starting in touch, or with the gap
-/// closed by `adjust` (which moved only penetrating nodes before), there is no note and the run
+/// note the part and the gap, also a gap far below the pair's tolerance (10⁻⁵ here), and the
+/// failure names them; starting in touch, or with the gap closed by the `adjust` the note
+/// suggests (`adjust` moved only penetrating nodes before), there is no note and the run
 /// finishes.
 #[test]
 fn a_force_on_a_block_over_a_gap_is_explained() {
     let base = box_mesh([1.0, 1.0, 0.3], [4, 4, 1], ElementKind::Hex8);
     let block = box_mesh([0.5, 0.5, 0.3], [2, 2, 1], ElementKind::Hex8);
-    for (gap, adjust) in [(0.05, ""), (0.0, ""), (0.05, "adjust = 0.06")] {
+    let model = |gap: f64, adjust: &str| {
         let mesh = tricontact_fem::structured::stack(&base, &block, [0.25, 0.25, 0.3 + gap]);
         let mut text = neo_hooke_bodies(1000.0, 1000.0);
         text += "[[boundary]]\ngroup = \"lower_zmin\"\nfix = [\"x\", \"y\", \"z\"]\n\
@@ -1441,41 +1442,56 @@ fn a_force_on_a_block_over_a_gap_is_explained() {
                  [[load]]\ngroup = \"upper_zmax\"\nforce = [0.0, 0.0, -1.0]\n";
         text += &contact("penalty", adjust);
         text += &nlgeom_steps(&[("press", 2)]);
-        let an = common::analysis(mesh, &text);
+        common::analysis(mesh, &text)
+    };
+    let solve = |an: &Analysis| {
+        let mut terms = ContactTerms::new(an);
+        tricontact_fem::driver::run(an, &mut terms, &mut |_| Ok(())).map_err(|e| e.to_string())
+    };
+    for (gap, shown) in [(0.05, "5.000e-2"), (1e-5, "1.000e-5")] {
+        let an = model(gap, "");
+        if gap < 0.01 {
+            // Below the pair's tolerance × h: such a gap was taken as touching.
+            assert!(
+                an.contacts[0].tolerance > gap,
+                "{}",
+                an.contacts[0].tolerance
+            );
+        }
         let notes = an.notes().join("\n");
-        let mut terms = ContactTerms::new(&an);
-        let run = tricontact_fem::driver::run(&an, &mut terms, &mut |_| Ok(()));
-        if gap > 0.0 && adjust.is_empty() {
-            assert!(
-                notes.contains("until contact closes")
-                    && notes.contains("unconstrained rigid-body mode")
-                    && notes.contains("is 5.000e-2 from the master")
-                    && notes.contains("adjust = 5.000e-2"),
-                "{notes}"
-            );
-            let message = run.expect_err("nothing holds the block").to_string();
-            assert!(
-                message
-                    .contains("while contact 'upper_zmin-lower_zmax' is open (a gap of 5.000e-2"),
-                "{message}"
-            );
-        } else {
-            assert!(
-                !notes.contains("until contact closes"),
-                "{gap} {adjust}: {notes}"
-            );
-            run.expect("touching, the base holds the block");
-        }
-        if !adjust.is_empty() {
-            let report = an.contacts[0].report.join(" ");
-            assert!(
-                report.contains(
-                    "9 slave nodes moved onto the master surface (0 penetrating it, 9 apart from it"
-                ),
-                "{report}"
-            );
-        }
+        assert!(
+            notes.contains("until contact closes")
+                && notes.contains("unconstrained rigid-body mode")
+                && notes.contains(&format!("is {shown} from the master")),
+            "{notes}"
+        );
+        let message = solve(&an).expect_err("nothing holds the block");
+        assert!(
+            message.contains(&format!(
+                "while contact 'upper_zmin-lower_zmax' is open (a gap of {shown}"
+            )),
+            "{message}"
+        );
+        // The `adjust` the note suggests closes the gap.
+        let suggested = notes
+            .split("`adjust = ")
+            .nth(1)
+            .and_then(|t| t.split('`').next())
+            .expect("a suggested adjust");
+        let an = model(gap, &format!("adjust = {suggested}"));
+        assert!(!an.notes().join(" ").contains("until contact closes"));
+        let report = an.contacts[0].report.join(" ");
+        assert!(
+            report.contains(
+                "9 slave nodes moved onto the master surface (0 penetrating it, 9 apart from it"
+            ),
+            "{report}"
+        );
+        solve(&an).expect("the gap closed, the base holds the block");
     }
+    let touching = model(0.0, "");
+    assert!(!touching.notes().join(" ").contains("until contact closes"));
+    solve(&touching).expect("touching, the base holds the block");
 }
 
 /// A block pressed onto a plate one element thick, with multipliers, the master every face of

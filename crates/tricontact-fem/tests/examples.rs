@@ -456,3 +456,32 @@ fn a_rigid_master_node_needs_each_component_held() {
         "{start} in {messages:#?}"
     );
 }
+
+/// The models of `examples/penalty-study/` (README, "The default penalty"; run by
+/// `scripts/default-penalty.sh`) resolve with no note on open gaps, and their default penalties
+/// are `10 E h` with `E` the geometric mean of each pair's two moduli.
+#[test]
+fn the_penalty_study_models_resolve() {
+    for (model, moduli) in [
+        ("hump-multiplier.toml", &[(1000.0, 10.0)][..]),
+        ("hump-penalty.toml", &[(1000.0, 10.0)]),
+        ("hump-augmented.toml", &[(1000.0, 10.0)]),
+        (
+            "stack-augmented.toml",
+            &[(1000.0, 100.0), (10000.0, 1000.0)],
+        ),
+        ("slide-off-two-pass.toml", &[(1000.0, 100.0)]),
+    ] {
+        let (_, an) = example("penalty-study", model, None);
+        assert_eq!(an.contacts.len(), moduli.len(), "{model}");
+        for (pair, (master, slave)) in an.contacts.iter().zip(moduli) {
+            let expected = 10.0 * f64::sqrt(master * slave) * pair.facet_size;
+            assert!(
+                (pair.penalty - expected).abs() <= 1e-12 * expected,
+                "{model}: {} against {expected}",
+                pair.penalty
+            );
+        }
+        assert!(an.open_gap_support().is_empty(), "{model}");
+    }
+}

@@ -145,12 +145,18 @@ impl OpenGap {
     pub fn note(&self) -> String {
         format!(
             "step '{}': with its boundaries and the slave nodes that touch the master at the \
-             start, {} until contact closes (the nearest other slave node of contact '{}', node \
-             {}, is {:.3e} from the master); a force or a pressure on it makes the first \
-             increment fail (an inverted element or a singular tangent): prescribe its motion \
-             until it touches (a first step), start it touching, or give the pair `adjust = \
-             {:.3e}` or more (slave nodes within it are moved onto the master)",
-            self.step, self.free, self.pair, self.node, self.gap, self.gap
+             start, {} until contact closes (the nearest slave node not yet touching, node {} \
+             of contact '{}', is {:.3e} from the master); a force or a pressure on it makes the \
+             first increment fail (an inverted element, a singular tangent or no convergence): \
+             prescribe its motion by a displacement boundary until it touches (a first step), \
+             start it touching, or give the pair `adjust = {:.3e}` or more (the nodes of a \
+             slave surface facing the master within it are moved onto it)",
+            self.step,
+            self.free,
+            self.node,
+            self.pair,
+            self.gap,
+            self.gap * (1.0 + 1e-3)
         )
     }
 
@@ -238,48 +244,61 @@ impl Analysis {
                     m.trim_end_matches("; add supports")
                 ));
             } else if s == 0 {
-                notes.extend(self.open_gap(&reach).map(|g| g.note()));
+                notes.extend(self.open_gaps(&reach, &mask).iter().map(OpenGap::note));
             }
         }
         notes
     }
 
-    /// The first step's body part that only contact across a gap holds, if any: its boundaries
-    /// and the normals of the slave nodes within reach of a master facet at the start hold it,
-    /// but not with the normals of the slave nodes touching the master alone (a gap within the
-    /// pair's `tolerance`). Nothing holds it until the gap closes, and the first increment's
-    /// tangent is singular for it: Newton then fails on an inverted element or a singular
-    /// tangent, which names neither the part nor the gap. A note of `check` and `run`
-    /// ([`OpenGap::note`]), and a hint in the message of a first step that fails before its
-    /// first increment ([`OpenGap::hint`]).
+    /// The first step's body parts that only contact across a gap holds: its boundaries and the
+    /// normals of the slave nodes within reach of a master facet at the start hold them, but
+    /// not with the normals of the slave nodes that touch the master (a gap of round-off,
+    /// `10⁻¹²` of the pair's facet size, or less) alone. Nothing holds such a part until the gap
+    /// closes, and the first increment's tangent is singular for it: Newton then fails (an
+    /// inverted element, a singular tangent, no convergence), which names neither the part nor
+    /// the gap. Each comes with the nearest slave node not yet touching among those of its
+    /// pairs (the part's own slave nodes, or the slave nodes facing its facets). A note of
+    /// `check` and `run` ([`OpenGap::note`]), and a hint in the message of a first step that
+    /// fails before its first increment ([`OpenGap::hint`]). The normals count as held in
+    /// space: a part touching another that is itself only held across a gap is not named.
     #[must_use]
-    pub fn open_gap_support(&self) -> Option<OpenGap> {
+    pub fn open_gap_support(&self) -> Vec<OpenGap> {
         if self.contacts.is_empty() || self.steps.is_empty() {
-            return None;
+            return Vec::new();
         }
-        self.open_gap(&self.initial_reach())
+        let reach = self.initial_reach();
+        let (mask, _) = crate::driver::step_constraints(self, 0);
+        if crate::rigid::check_supports_with(self, &mask, &held_along(&reach, |_| true)).is_err() {
+            return Vec::new();
+        }
+        self.open_gaps(&reach, &mask)
     }
 
-    /// [`Analysis::open_gap_support`] from the slave nodes within reach at the start.
-    fn open_gap(&self, reach: &[Reach]) -> Option<OpenGap> {
-        let (mask, _) = crate::driver::step_constraints(self, 0);
-        let touching = |r: &Reach| r.gap <= self.contacts[r.pair].tolerance;
-        if crate::rigid::check_supports_with(self, &mask, &held_along(reach, |_| true)).is_err() {
-            return None;
-        }
-        let free =
-            crate::rigid::check_supports_with(self, &mask, &held_along(reach, touching)).err()?;
-        let nearest = reach
-            .iter()
-            .filter(|r| !touching(r))
-            .min_by(|a, b| a.gap.total_cmp(&b.gap))?;
-        Some(OpenGap {
-            step: self.steps[0].name.clone(),
-            free: free.trim_end_matches("; add supports").to_string(),
-            pair: self.contacts[nearest.pair].name.clone(),
-            node: self.mesh.node_tags[nearest.slave],
-            gap: nearest.gap,
-        })
+    /// [`Analysis::open_gap_support`] from the slave nodes within reach at the start and the
+    /// first step's prescribed DOFs `mask`, which with all of them hold every part.
+    fn open_gaps(&self, reach: &[Reach], mask: &[bool]) -> Vec<OpenGap> {
+        let touching = |r: &Reach| r.gap <= 1e-12 * self.contacts[r.pair].facet_size;
+        let free = crate::rigid::free_parts(self, mask, &held_along(reach, touching));
+        free.into_iter()
+            .filter_map(|(nodes, message)| {
+                let part: std::collections::HashSet<usize> = nodes.into_iter().collect();
+                let nearest = reach
+                    .iter()
+                    .filter(|r| !touching(r))
+                    .filter(|r| {
+                        part.contains(&r.slave)
+                            || r.facet.iter().any(|&a| part.contains(&(a as usize)))
+                    })
+                    .min_by(|a, b| a.gap.total_cmp(&b.gap))?;
+                Some(OpenGap {
+                    step: self.steps[0].name.clone(),
+                    free: message.trim_end_matches("; add supports").to_string(),
+                    pair: self.contacts[nearest.pair].name.clone(),
+                    node: self.mesh.node_tags[nearest.slave],
+                    gap: nearest.gap,
+                })
+            })
+            .collect()
     }
 
     /// Each slave node within reach of a master facet at the reference positions, with the

@@ -774,8 +774,9 @@ struct Slaves<'a> {
 }
 
 /// The slave nodes that start inside the master `surface` or near it: those within `adjust` of it
-/// (inside, or apart from it with their foot on a facet) are moved onto it in `mesh`, the deeper
-/// ones are counted; returns what to report. A rigid master whose normals
+/// (inside, or apart from it with their foot on a facet and their slave surface facing it) are
+/// moved onto it in `mesh`, the deeper ones are counted; returns what to report. Only nodes
+/// within the search radius `h_max` of a facet are seen. A rigid master whose normals
 /// point into the slave surface is refused. `(h_mean, h_max)`: the master's mean and longest
 /// edge (the search radius).
 fn initial_penetrations(
@@ -807,17 +808,23 @@ fn initial_penetrations(
         };
         // Only where the two surfaces are roughly parallel (|cos| > 1/2): a slave face at
         // right angles to the master (a symmetry plane) says nothing.
-        if let Some(n) = slave_normals.get(&a).and_then(|n| n.try_normalize(0.0)) {
-            let cos = pair.facet.normal().dot(&n);
+        let cos = slave_normals
+            .get(&a)
+            .and_then(|n| n.try_normalize(0.0))
+            .map(|n| pair.facet.normal().dot(&n));
+        if let Some(cos) = cos {
             facing += usize::from(cos < -0.5);
             away += usize::from(cos > 0.5);
         }
         let p = pair.gap();
-        // Within `adjust` on either side: onto the master, a node apart from it only where its
-        // foot is on the facet (not past the master's edge).
+        // Within `adjust` on either side: onto the master; a node apart from it only where its
+        // foot is on the facet (not past the master's edge) and its slave surface faces the
+        // master (not a side face, nor a node set's inner nodes, which would crush elements).
         let near = p.abs() <= adjust
             && p != 0.0
-            && (p < 0.0 || pair.projection.is_inside(PROJECTION_TOLERANCE));
+            && (p < 0.0
+                || (pair.projection.is_inside(PROJECTION_TOLERANCE)
+                    && cos.is_some_and(|c| c < -0.5)));
         if near {
             moves.push((a, -p * pair.facet.normal()));
             moved += usize::from(p < 0.0);
