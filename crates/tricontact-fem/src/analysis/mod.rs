@@ -131,7 +131,8 @@ pub struct OpenGap {
     pub step: String,
     /// The part and its free rigid-body modes, as [`crate::rigid::check_supports`] names them.
     pub free: String,
-    /// The pair of the slave node nearest the master among those apart from it.
+    /// The pair of the slave node nearest the master among the part's own that are apart from
+    /// it (its slave nodes, or the slave nodes facing its facets).
     pub pair: String,
     /// That node's Gmsh tag.
     pub node: u64,
