@@ -835,7 +835,6 @@ impl ExtraTerms for ContactTerms {
     fn after_converged(&mut self, u: &[f64]) -> Result<bool, String> {
         self.check_held_nodes()?;
         self.check_crossings(u)?;
-        self.measure_flanks(u)?;
         let mut done = true;
         self.outer = None;
         for (p, pair) in self.pairs.iter().enumerate() {
@@ -860,6 +859,11 @@ impl ExtraTerms for ContactTerms {
                     st.lambda_k = if st.active { st.lambda.min(0.0) } else { 0.0 };
                 }
             }
+        }
+        // Measured for the reports once, at the solve that ends the increment (not at each
+        // Uzawa re-solve: a tree per pass each time).
+        if done {
+            self.measure_flanks(u)?;
         }
         Ok(done)
     }
