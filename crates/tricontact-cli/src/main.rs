@@ -223,11 +223,6 @@ fn set_threads(threads: Option<usize>) -> Result<(), String> {
 
 /// `info`'s line of the verbose log; `previous` is the load factor the increment started from.
 fn increment_line(info: &IncrementInfo<'_>, previous: f64) -> String {
-    let rel: Vec<String> = info
-        .relative_residuals()
-        .iter()
-        .map(|r| format!("{r:.1e}"))
-        .collect();
     let searches = match info.line_searches {
         0 => String::new(),
         1 => " (1 line-search trial)".to_string(),
@@ -242,8 +237,27 @@ fn increment_line(info: &IncrementInfo<'_>, previous: f64) -> String {
         info.iterations,
         info.cutbacks,
         info.method,
-        rel.join(" ")
+        residual_list(&info.relative_residuals())
     )
+}
+
+/// Relative residuals as the verbose log lists them, two digits each.
+fn residual_list(relative: &[f64]) -> String {
+    let rel: Vec<String> = relative.iter().map(|r| format!("{r:.1e}")).collect();
+    rel.join(" ")
+}
+
+/// The verbose lines of a failed attempt: what it aimed at, its outcome and why, then its
+/// relative residuals when it had any.
+fn attempt_lines(head: &str, outcome: &str, a: &driver::Attempt) -> Vec<String> {
+    let mut lines = vec![format!("{head} {outcome}: {a}")];
+    if !a.residuals.is_empty() {
+        lines.push(format!(
+            "    rel. residuals [{}]",
+            residual_list(&a.residuals)
+        ));
+    }
+    lines
 }
 
 /// The verbose log of a converged increment that started at load factor `previous`: the attempts
@@ -252,17 +266,18 @@ fn verbose_lines(info: &IncrementInfo<'_>, previous: f64) -> Vec<String> {
     let mut lines: Vec<String> = info
         .attempts
         .iter()
-        .map(|a| {
+        .flat_map(|a| {
             let outcome = match a.retry {
                 driver::Retry::CutBack => "cut back",
                 driver::Retry::LineSearch => "failed",
             };
-            format!(
-                "step {} '{}' attempt t = {} {outcome}: {a}",
+            let head = format!(
+                "step {} '{}' attempt t = {}",
                 info.step + 1,
                 info.step_name,
                 load_factor_text(a.target, a.target - previous, 4)
-            )
+            );
+            attempt_lines(&head, outcome, a)
         })
         .collect();
     lines.push(increment_line(info, previous));
@@ -291,9 +306,13 @@ fn failed_attempts(an: &Analysis, e: &FemError) -> Vec<String> {
         .map_or(0, |i| i + 1);
     attempts
         .iter()
-        .map(|a| {
+        .flat_map(|a| {
             let t = load_factor_text(a.target, a.target - load_factor, 4);
-            format!("step {number} '{step}' attempt t = {t} failed: {a}")
+            attempt_lines(
+                &format!("step {number} '{step}' attempt t = {t}"),
+                "failed",
+                a,
+            )
         })
         .collect()
 }
@@ -356,6 +375,9 @@ fn run(
         Ok(())
     });
     pb.finish_and_clear();
+    if let Err(e) = &summary {
+        record.record_failure(&an, e);
+    }
     // What was left pending, whether the run succeeded or not: the tables' last rows, and on a
     // failure the last converged state if `every` skipped it. A run's own error comes first.
     let flushed = writer.finish(&an).and_then(|()| {

@@ -3,6 +3,8 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use tricontact_fem::report::{NewtonLog, read_newton};
+
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_tricontact"))
 }
@@ -468,8 +470,9 @@ fn closed_stdout_ends_quietly_without_panic() {
 }
 
 /// The sliding example with a penalty, `line_search` in each step set to `line_search`, run
-/// with `--verbose` in a temporary folder named `name`: its standard output.
-fn penalty_sliding(name: &str, line_search: &str) -> String {
+/// with `--verbose` in a temporary folder named `name`: its standard output and its `newton.csv`
+/// as read.
+fn penalty_sliding(name: &str, line_search: &str) -> (String, Vec<NewtonLog>) {
     let out = temp_dir(name);
     let ex = examples_dir().join("sliding");
     let text = std::fs::read_to_string(ex.join("model.toml")).expect("model");
@@ -496,8 +499,9 @@ fn penalty_sliding(name: &str, line_search: &str) -> String {
         "--output".as_ref(),
         out.join("results").as_os_str(),
     ]);
+    let logs = read_newton(&out.join("results")).expect("newton.csv");
     std::fs::remove_dir_all(&out).ok();
-    stdout
+    (stdout, logs)
 }
 
 /// A contact run whose first increment fails writes `history.csv` with its whole header (the
@@ -541,7 +545,7 @@ fn verbose_log_names_each_cut_back_attempt() {
     // The sliding example with a penalty and no line search needs cutbacks (VERIFICATION.md):
     // each failed attempt is reported with its target load factor and reason before the
     // increment that converged.
-    let stdout = penalty_sliding("cutbacks", "false");
+    let (stdout, logs) = penalty_sliding("cutbacks", "false");
     let attempts: Vec<&str> = stdout.lines().filter(|l| l.contains("cut back:")).collect();
     assert!(!attempts.is_empty(), "{stdout}");
     assert!(
@@ -558,13 +562,39 @@ fn verbose_log_names_each_cut_back_attempt() {
         "{done} vs {}",
         attempts.len()
     );
+    // `newton.csv` holds each failed attempt, with its residuals (as the verbose log lists them
+    // on the line after it), before the attempt at the same increment that converged.
+    let listed: Vec<&str> = stdout
+        .lines()
+        .filter(|l| l.starts_with("    rel. residuals ["))
+        .collect();
+    let failed: Vec<&NewtonLog> = logs.iter().filter(|l| !l.converged()).collect();
+    assert_eq!(failed.len(), attempts.len(), "{failed:?}");
+    for (k, f) in logs.iter().enumerate() {
+        if f.converged() {
+            continue;
+        }
+        assert!(
+            f.outcome.starts_with("cut back: ") && !f.relative.is_empty(),
+            "{f:?}"
+        );
+        let next = logs[k..]
+            .iter()
+            .find(|l| l.converged())
+            .expect("converged after");
+        assert_eq!((next.step, next.increment), (f.step, f.increment), "{f:?}");
+        assert!(f.load_factor > next.load_factor, "{f:?} then {next:?}");
+        let text: Vec<String> = f.relative.iter().map(|r| format!("{r:.1e}")).collect();
+        let line = format!("    rel. residuals [{}]", text.join(" "));
+        assert!(listed.contains(&line.as_str()), "{line}");
+    }
 }
 
 #[test]
 fn the_automatic_line_search_is_reported_where_it_comes_on() {
     // The same run with the default `line_search = "auto"`: the first inverted element switches
     // the line search on; that attempt is reported as failed and retried, not cut back.
-    let stdout = penalty_sliding("auto-line-search", "\"auto\"");
+    let (stdout, logs) = penalty_sliding("auto-line-search", "\"auto\"");
     let failed: Vec<&str> = stdout.lines().filter(|l| l.contains(" failed: ")).collect();
     assert_eq!(failed.len(), 1, "{stdout}");
     assert!(
@@ -584,6 +614,19 @@ fn the_automatic_line_search_is_reported_where_it_comes_on() {
         done.contains("0 cutbacks, line search switched on in 1 step;"),
         "{done}"
     );
+    // In `newton.csv`, the attempt retried with the line search, at the load factor of the one
+    // that converged.
+    let failed: Vec<&NewtonLog> = logs.iter().filter(|l| !l.converged()).collect();
+    assert_eq!(failed.len(), 1, "{failed:?}");
+    assert!(
+        failed[0].outcome.starts_with("failed: ") && failed[0].outcome.contains("inverted"),
+        "{failed:?}"
+    );
+    let next = logs
+        .iter()
+        .find(|l| l.converged() && (l.step, l.increment) == (failed[0].step, failed[0].increment))
+        .expect("the same increment converged");
+    assert_eq!(next.load_factor, failed[0].load_factor);
 }
 
 /// A run that fails after its cutbacks lists, with `--verbose`, every attempt of the increment
@@ -632,6 +675,30 @@ fn verbose_log_lists_the_attempts_of_a_failed_increment() {
     assert!(
         stderr.contains("to 0.062500") && stderr.contains("after 2 cutbacks"),
         "{stderr}"
+    );
+    // `newton.csv` holds the three attempts: the first two cut back, the last failed, each
+    // with its iterations from the predictor on.
+    let logs = read_newton(&out.join("results")).expect("newton.csv");
+    let attempts: Vec<(f64, &str, usize)> = logs
+        .iter()
+        .map(|l| {
+            let kind = l.outcome.split(':').next().unwrap_or_default();
+            (l.load_factor, kind, l.increment)
+        })
+        .collect();
+    assert_eq!(
+        attempts,
+        [
+            (0.25, "cut back", 1),
+            (0.125, "cut back", 1),
+            (0.0625, "failed", 1)
+        ],
+        "{logs:?}"
+    );
+    assert!(
+        logs.iter()
+            .all(|l| l.relative.len() > 2 && l.outcome.contains("stalled at round-off")),
+        "{logs:?}"
     );
     std::fs::remove_dir_all(&out).ok();
 }

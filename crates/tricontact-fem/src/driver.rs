@@ -37,7 +37,9 @@ use crate::assembly::{DofMap, ExtraTerms, Pattern, PointField, node_adjacency};
 use crate::error::{FemError, Result};
 use crate::linsolve::LinearSolver;
 use crate::model::{Extrapolation, LineSearchMode};
-use crate::newton::{Converged, Failure, IncrementProblem, solve_increment};
+use crate::newton::{
+    Converged, Failed, Failure, IncrementProblem, relative_residuals, solve_increment,
+};
 use crate::ordering::equation_order;
 use crate::rigid::check_supports;
 
@@ -93,6 +95,10 @@ pub struct Attempt {
     pub reason: String,
     /// What came after it.
     pub retry: Retry,
+    /// Its relative residuals: the predictor's, then each iteration's (with the augmented
+    /// Lagrangian, the solves of successive updates after each other); empty when it failed
+    /// before its first residual.
+    pub residuals: Vec<f64>,
 }
 
 /// How a failed attempt was followed up.
@@ -121,12 +127,7 @@ impl IncrementInfo<'_> {
     /// themselves when the reference is zero).
     #[must_use]
     pub fn relative_residuals(&self) -> Vec<f64> {
-        let scale = if self.reference > 0.0 {
-            self.reference
-        } else {
-            1.0
-        };
-        self.residuals.iter().map(|r| r / scale).collect()
+        relative_residuals(self.residuals, self.reference)
     }
 }
 
@@ -495,23 +496,24 @@ fn run_step(
                 attempts.clear();
                 control.converged();
             }
-            Err(failure) if switches_line_search(&problem, &failure, extra) => {
+            Err(failed) if switches_line_search(&problem, &failed.failure, extra) => {
                 // Retried at the same size, with the line search from now on.
                 extra.restore();
                 line_search = true;
                 carried.summary.line_search_switches += 1;
                 attempts.push(Attempt {
                     target: t_new,
-                    reason: failure.to_string(),
+                    reason: failed.failure.to_string(),
                     retry: Retry::LineSearch,
+                    residuals: failed.relative(),
                 });
             }
-            Err(failure) => {
+            Err(failed) => {
                 carried.summary.cutbacks += 1;
                 cut_back(
                     &problem,
                     (t, t_new),
-                    failure,
+                    failed,
                     extra,
                     &mut control,
                     &mut attempts,
@@ -590,12 +592,14 @@ fn commit(
 fn cut_back(
     problem: &IncrementProblem<'_>,
     (t, t_new): (f64, f64),
-    failure: Failure,
+    failed: Failed,
     extra: &mut dyn ExtraTerms,
     control: &mut IncrementControl,
     attempts: &mut Vec<Attempt>,
 ) -> Result<()> {
     let step = problem.step;
+    let residuals = failed.relative();
+    let failure = failed.failure;
     let hint = failure_hint(&failure, extra, problem.dm);
     extra.restore();
     if let (Failure::Singular(m), false) = (&failure, step.nlgeom) {
@@ -609,6 +613,7 @@ fn cut_back(
         target: t_new,
         reason: failure.to_string(),
         retry: Retry::CutBack,
+        residuals,
     });
     if control.failed() {
         return Ok(());
@@ -690,28 +695,48 @@ fn extrapolated(u: &[f64], du: &[f64], ratio: f64) -> Vec<f64> {
 
 /// One increment from the committed `u0`, Newton starting at `start`, repeated
 /// from the converged state while the extra terms ask for it (outer loop).
-/// Residual histories and iteration counts of the solves are concatenated.
+/// Residual histories and iteration counts of the solves are concatenated (those of a failure too).
 fn solve_with_outer(
     problem: &IncrementProblem<'_>,
     extra: &mut dyn ExtraTerms,
     u0: &[f64],
     start: &[f64],
     solver: &mut LinearSolver,
-) -> std::result::Result<Converged, Failure> {
-    extra.begin_increment(u0).map_err(Failure::Diverged)?;
+) -> std::result::Result<Converged, Failed> {
+    // A failure of the extra terms themselves, after the solves `c` (none before the first).
+    let failed = |failure: String, c: Option<&Converged>| Failed {
+        failure: Failure::Diverged(failure),
+        residuals: c.map_or_else(Vec::new, |c| c.residuals.clone()),
+        reference: c.map_or(0.0, |c| c.reference),
+    };
+    extra.begin_increment(u0).map_err(|e| failed(e, None))?;
     let mut c = solve_increment(problem, extra, u0, start, solver)?;
     let mut outer = 0;
-    while !extra.after_converged(&c.u).map_err(Failure::Diverged)? {
+    while !extra
+        .after_converged(&c.u)
+        .map_err(|e| failed(e, Some(&c)))?
+    {
         outer += 1;
         if outer > MAX_OUTER {
             let why = extra
                 .outer_note()
                 .map_or_else(String::new, |n| format!(": {n}"));
-            return Err(Failure::Diverged(format!(
-                "outer (Uzawa) loop not converged in {MAX_OUTER} solves{why}"
-            )));
+            return Err(failed(
+                format!("outer (Uzawa) loop not converged in {MAX_OUTER} solves{why}"),
+                Some(&c),
+            ));
         }
-        let next = solve_increment(problem, extra, u0, &c.u, solver)?;
+        // The solves of the increment follow each other in its record, failed or not.
+        let next = match solve_increment(problem, extra, u0, &c.u, solver) {
+            Ok(next) => next,
+            Err(mut f) => {
+                let mut residuals = std::mem::take(&mut c.residuals);
+                residuals.append(&mut f.residuals);
+                f.residuals = residuals;
+                f.reference = f.reference.max(c.reference);
+                return Err(f);
+            }
+        };
         let mut residuals = std::mem::take(&mut c.residuals);
         residuals.extend_from_slice(&next.residuals);
         let mut notes = std::mem::take(&mut c.notes);

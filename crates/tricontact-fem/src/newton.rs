@@ -71,6 +71,35 @@ pub struct Converged {
     pub notes: Vec<String>,
 }
 
+/// A solve that failed: why, and the weighted residual norms it went through (the predictor's,
+/// then each iteration's) with the reference of its relative test, for the record of the attempt.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Failed {
+    /// Why.
+    pub failure: Failure,
+    /// Residual norms over free equations: predictor, then each iteration (empty when the solve
+    /// failed before its first residual).
+    pub residuals: Vec<f64>,
+    /// Reference norm of the relative test when it failed.
+    pub reference: f64,
+}
+
+impl Failed {
+    /// The residual norms relative to the reference ([`relative_residuals`]).
+    #[must_use]
+    pub fn relative(&self) -> Vec<f64> {
+        relative_residuals(&self.residuals, self.reference)
+    }
+}
+
+/// Residual norms divided by the reference norm of the convergence test (the norms themselves when
+/// the reference is zero).
+#[must_use]
+pub fn relative_residuals(residuals: &[f64], reference: f64) -> Vec<f64> {
+    let scale = if reference > 0.0 { reference } else { 1.0 };
+    residuals.iter().map(|r| r / scale).collect()
+}
+
 /// Why an increment failed.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Failure {
@@ -207,14 +236,35 @@ impl IncrementProblem<'_> {
 /// `Δu` from `u0`.
 ///
 /// # Errors
-/// A [`Failure`]; the caller keeps its committed state.
+/// [`Failed`]: the [`Failure`] with the residuals of the iterations before it; the caller keeps
+/// its committed state.
 pub fn solve_increment(
     p: &IncrementProblem<'_>,
     extra: &mut dyn ExtraTerms,
     u0: &[f64],
     start: &[f64],
     solver: &mut LinearSolver,
-) -> Result<Converged, Failure> {
+) -> Result<Converged, Failed> {
+    let mut it = Iterate::new(start, 0.0);
+    match iterate(p, extra, (u0, start), solver, &mut it) {
+        Ok(r) => Ok(it.converged(r)),
+        Err(failure) => Err(Failed {
+            failure,
+            residuals: it.residuals,
+            reference: it.reference,
+        }),
+    }
+}
+
+/// The iterations of [`solve_increment`] on `it`, started at `start`; returns the full residual
+/// at the converged `it.u`.
+fn iterate(
+    p: &IncrementProblem<'_>,
+    extra: &mut dyn ExtraTerms,
+    (u0, start): (&[f64], &[f64]),
+    solver: &mut LinearSolver,
+    it: &mut Iterate,
+) -> Result<Vec<f64>, Failure> {
     let (an, dm) = (p.an, p.dm);
     let structure = structure(extra, p.follower);
     let weights = Weights::new(dm, &extra.residual_scales());
@@ -223,7 +273,7 @@ pub fn solve_increment(
             .filter(|&d| dm.eq[d] != NO_EQ)
             .map(|d| p.fext[d]),
     );
-    let mut it = Iterate::new(start, fext_norm.max(SCALE_FRACTION * p.force_scale));
+    it.reference = fext_norm.max(SCALE_FRACTION * p.force_scale);
     // Line search where the residual is an energy gradient: the correction being applied.
     let searching = p.line_search && p.line_search_applies(extra);
     // Small strain without extra or follower terms: the tangent is constant,
@@ -292,7 +342,7 @@ pub fn solve_increment(
             it.converged_at(p.step, u0, &weights.dof, rnorm)?
         };
         if done {
-            return Ok(it.converged(r));
+            return Ok(r);
         }
         if need_tangent {
             factor_tangent(p.pat, &mut asm, &weights, structure, solver)?;

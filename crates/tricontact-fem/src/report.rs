@@ -2,8 +2,11 @@
 //! comparison, as CSV tables and (with `[output] plots = true`) PNG charts.
 //!
 //! Files (all atomic):
-//! * `newton.csv` — `step,increment,iteration,relative_residual` for every converged increment,
-//!   iteration 0 being the predictor (the residual the increment starts from);
+//! * `newton.csv` — `step,increment,load_factor,iteration,relative_residual,outcome` for every
+//!   attempt at an increment, iteration 0 being the predictor (the residual the attempt starts
+//!   from): the attempts that failed (outcome `cut back: <why>`, or `failed: <why>` for one
+//!   retried with the line search and for the last of a run that stopped) before the one that
+//!   converged (`converged`);
 //! * `hertz.csv` — one row per increment when the model has a `[hertz]` table (see
 //!   [`crate::hertz`]; a cell is empty where its value is undefined: no fit with fewer than three
 //!   closed nodes, no relative error without force), `hertz_profile.csv` — `r, p, p_hertz` of
@@ -23,7 +26,7 @@ use std::path::{Path, PathBuf};
 
 use crate::analysis::Analysis;
 use crate::atomic::write_atomic;
-use crate::driver::IncrementInfo;
+use crate::driver::{Attempt, IncrementInfo, Retry};
 use crate::error::{FemError, Result};
 use crate::hertz::{HertzSample, HertzSetup, fit_approach};
 use crate::plots::{Axes, Series, chart, check_png};
@@ -31,6 +34,10 @@ use crate::throttle::Throttle;
 
 /// `newton.csv`: the residual of every Newton iteration.
 const NEWTON_CSV: &str = "newton.csv";
+/// The header of `newton.csv`.
+const NEWTON_HEADER: &str = "step,increment,load_factor,iteration,relative_residual,outcome";
+/// The header `newton.csv` had until 2026-12-05 (converged increments only), still read.
+const NEWTON_HEADER_V1: &str = "step,increment,iteration,relative_residual";
 /// `hertz.csv`: the Hertz comparison per increment.
 const HERTZ_CSV: &str = "hertz.csv";
 /// `hertz_profile.csv`: the pressure profile of the last increment.
@@ -66,15 +73,59 @@ pub fn csv_field(s: &str) -> Cow<'_, str> {
     }
 }
 
-/// Residual history of one increment.
+/// Residual history of one attempt at an increment.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NewtonLog {
     /// Step index (0-based).
     pub step: usize,
     /// Increment within the step (1-based).
     pub increment: usize,
+    /// The load factor the attempt aimed at (NaN when read from a file of the older form that
+    /// did not give it).
+    pub load_factor: f64,
     /// Relative residuals: predictor, then each iteration.
     pub relative: Vec<f64>,
+    /// [`CONVERGED`], or how the attempt failed and what came after it.
+    pub outcome: String,
+}
+
+/// The outcome of an attempt that converged.
+pub const CONVERGED: &str = "converged";
+
+impl NewtonLog {
+    /// `true` for the attempt that converged.
+    #[must_use]
+    pub fn converged(&self) -> bool {
+        self.outcome == CONVERGED
+    }
+}
+
+/// The `newton.csv` rows of the failed `attempts` at increment `increment` of step `step`; the
+/// last is marked `failed` when it ended the run (`stopped`).
+fn attempt_logs(
+    step: usize,
+    increment: usize,
+    attempts: &[Attempt],
+    stopped: bool,
+) -> Vec<NewtonLog> {
+    attempts
+        .iter()
+        .enumerate()
+        .map(|(k, a)| {
+            let kind = match a.retry {
+                _ if stopped && k + 1 == attempts.len() => "failed",
+                Retry::CutBack => "cut back",
+                Retry::LineSearch => "failed",
+            };
+            NewtonLog {
+                step,
+                increment,
+                load_factor: a.target,
+                relative: a.residuals.clone(),
+                outcome: format!("{kind}: {a}"),
+            }
+        })
+        .collect()
 }
 
 /// What a run records for its tables and plots.
@@ -104,10 +155,15 @@ impl RunRecord {
 
     /// Records a converged increment.
     pub fn record(&mut self, an: &Analysis, info: &IncrementInfo<'_>) {
+        let (step, increment) = (info.step, info.increment);
+        self.newton
+            .extend(attempt_logs(step, increment, info.attempts, false));
         self.newton.push(NewtonLog {
-            step: info.step,
-            increment: info.increment,
+            step,
+            increment,
+            load_factor: info.load_factor,
             relative: info.relative_residuals(),
+            outcome: CONVERGED.to_string(),
         });
         let forces = info
             .history
@@ -120,6 +176,25 @@ impl RunRecord {
         if let Some((setup, samples)) = &mut self.hertz {
             samples.push(setup.measure(an, info));
         }
+    }
+
+    /// Records the attempts of the increment a run stopped on, when `e` is a step that did not
+    /// converge (nothing otherwise).
+    pub fn record_failure(&mut self, an: &Analysis, e: &FemError) {
+        let FemError::NotConverged { step, attempts, .. } = e else {
+            return;
+        };
+        let Some(s) = an.steps.iter().position(|st| st.name == *step) else {
+            return;
+        };
+        let increment = self
+            .newton
+            .iter()
+            .rev()
+            .find(|l| l.step == s && l.converged())
+            .map_or(1, |l| l.increment + 1);
+        self.newton
+            .extend(attempt_logs(s, increment, attempts, true));
     }
 
     /// [`RunRecord::write_tables`] when a rewrite is due ([`crate::throttle`]): after each
@@ -142,10 +217,17 @@ impl RunRecord {
     /// # Errors
     /// File errors.
     pub fn write_tables(&self, dir: &Path) -> Result<Vec<PathBuf>> {
-        let mut csv = String::from("step,increment,iteration,relative_residual\n");
+        let mut csv = format!("{NEWTON_HEADER}\n");
         for log in &self.newton {
+            let outcome = csv_field(&log.outcome);
             for (k, r) in log.relative.iter().enumerate() {
-                let _ = writeln!(csv, "{},{},{k},{r:e}", log.step + 1, log.increment);
+                let _ = writeln!(
+                    csv,
+                    "{},{},{:e},{k},{r:e},{outcome}",
+                    log.step + 1,
+                    log.increment,
+                    log.load_factor
+                );
             }
         }
         let mut written = vec![dir.join(NEWTON_CSV)];
@@ -261,8 +343,12 @@ impl RunRecord {
     pub fn write_plots(&self, dir: &Path) -> Result<Vec<PathBuf>> {
         let mut written = Vec::new();
         let path = dir.join(NEWTON_PNG);
-        let start = self.newton.len().saturating_sub(8);
-        let series: Vec<Series> = self.newton[start..].iter().map(newton_series).collect();
+        let converged: Vec<&NewtonLog> = self.newton.iter().filter(|l| l.converged()).collect();
+        let start = converged.len().saturating_sub(8);
+        let series: Vec<Series> = converged[start..]
+            .iter()
+            .map(|l| newton_series(l))
+            .collect();
         chart(&path, &newton_axes(), &series)?;
         written.push(path);
         if self.forces.iter().any(|(_, f)| !f.is_empty()) {
@@ -453,7 +539,8 @@ fn hertz_plots(dir: &Path, setup: &HertzSetup, samples: &[HertzSample]) -> Resul
     Ok(vec![p_path, d_path])
 }
 
-/// Reads `newton.csv` of a result folder.
+/// Reads `newton.csv` of a result folder (also in its older form, converged increments only
+/// without load factors).
 ///
 /// # Errors
 /// Missing or malformed file (the message names file and line).
@@ -461,15 +548,21 @@ pub fn read_newton(dir: &Path) -> Result<Vec<NewtonLog>> {
     let path = dir.join(NEWTON_CSV);
     let text = std::fs::read_to_string(&path).map_err(|e| FemError::io(&path, e))?;
     let mut logs: Vec<NewtonLog> = Vec::new();
-    let header = "step,increment,iteration,relative_residual";
-    if let Some(first) = text.lines().next()
-        && first.trim_start_matches('\u{feff}').trim() != header
+    let older = match text
+        .lines()
+        .next()
+        .map(|l| l.trim_start_matches('\u{feff}').trim())
     {
-        return Err(FemError::Output(format!(
-            "{}:1: expected the header '{header}', found '{first}'",
-            path.display()
-        )));
-    }
+        None => false,
+        Some(NEWTON_HEADER) => false,
+        Some(NEWTON_HEADER_V1) => true,
+        Some(first) => {
+            return Err(FemError::Output(format!(
+                "{}:1: expected the header '{NEWTON_HEADER}', found '{first}'",
+                path.display()
+            )));
+        }
+    };
     for (n, line) in text.lines().enumerate().skip(1) {
         if line.trim().is_empty() {
             continue;
@@ -481,17 +574,21 @@ pub fn read_newton(dir: &Path) -> Result<Vec<NewtonLog>> {
                 n + 1
             ))
         };
-        let cols: Vec<&str> = line.split(',').collect();
-        let [step, inc, iteration, r] = cols.as_slice() else {
-            return Err(bad());
-        };
-        let step: usize = step.parse().map_err(|_| bad())?;
-        let increment: usize = inc.parse().ok().filter(|&i| i > 0).ok_or_else(bad)?;
-        let iteration: usize = iteration.parse().map_err(|_| bad())?;
-        let r: f64 = r.parse().map_err(|_| bad())?;
-        // Iterations count 0, 1, … within an increment: a row out of sequence is not ours.
+        let row = if older {
+            newton_row_v1(line)
+        } else {
+            newton_row(line)
+        }
+        .ok_or_else(bad)?;
+        let (step, increment, load_factor, iteration, r, outcome) = row;
+        // Iterations count 0, 1, … within an attempt: a row out of sequence is not ours.
         match logs.last_mut() {
-            Some(l) if l.step + 1 == step && l.increment == increment => {
+            Some(l)
+                if iteration > 0
+                    && l.step + 1 == step
+                    && l.increment == increment
+                    && l.outcome == outcome =>
+            {
                 if iteration != l.relative.len() {
                     return Err(bad());
                 }
@@ -501,11 +598,62 @@ pub fn read_newton(dir: &Path) -> Result<Vec<NewtonLog>> {
             _ => logs.push(NewtonLog {
                 step: step.checked_sub(1).ok_or_else(bad)?,
                 increment,
+                load_factor,
                 relative: vec![r],
+                outcome,
             }),
         }
     }
     Ok(logs)
+}
+
+/// A row of `newton.csv`: step and increment (1-based), load factor, iteration, relative
+/// residual and outcome (the last field, in double quotes when it holds a comma or a quote).
+type NewtonRow = (usize, usize, f64, usize, f64, String);
+
+/// A row of the present form, `None` when malformed.
+fn newton_row(line: &str) -> Option<NewtonRow> {
+    let mut cols = line.splitn(6, ',');
+    let mut next = || cols.next();
+    let (step, inc, t, iteration, r) = (next()?, next()?, next()?, next()?, next()?);
+    let outcome = unquote(next()?)?;
+    Some((
+        step.parse().ok()?,
+        inc.parse().ok().filter(|&i| i > 0)?,
+        t.parse().ok()?,
+        iteration.parse().ok()?,
+        r.parse().ok()?,
+        outcome,
+    ))
+}
+
+/// A row of the older form (`step,increment,iteration,relative_residual`, converged increments
+/// only), `None` when malformed.
+fn newton_row_v1(line: &str) -> Option<NewtonRow> {
+    let cols: Vec<&str> = line.split(',').collect();
+    let [step, inc, iteration, r] = cols.as_slice() else {
+        return None;
+    };
+    Some((
+        step.parse().ok()?,
+        inc.parse().ok().filter(|&i| i > 0)?,
+        f64::NAN,
+        iteration.parse().ok()?,
+        r.parse().ok()?,
+        CONVERGED.to_string(),
+    ))
+}
+
+/// The text of a CSV field as [`csv_field`] writes it; `None` for a quote out of place.
+fn unquote(field: &str) -> Option<String> {
+    match field.strip_prefix('"') {
+        None => (!field.contains('"')).then(|| field.to_string()),
+        Some(inner) => {
+            let inner = inner.strip_suffix('"')?;
+            let text = inner.replace("\"\"", "\"");
+            (text.matches('"').count() * 2 == inner.matches('"').count()).then_some(text)
+        }
+    }
 }
 
 /// The residual series of one increment (`pick`, 1-based; the last one when `None`) of the
@@ -515,9 +663,10 @@ pub fn read_newton(dir: &Path) -> Result<Vec<NewtonLog>> {
 /// An unreadable `newton.csv`, a missing increment, or one with nothing to plot.
 fn folder_series(dir: &Path, pick: Option<(usize, usize)>) -> Result<Series> {
     let logs = read_newton(dir)?;
+    let mut converged = logs.iter().filter(|l| l.converged());
     let log = match pick {
-        Some((s, i)) => logs.iter().find(|l| l.step + 1 == s && l.increment == i),
-        None => logs.iter().max_by_key(|l| (l.step, l.increment)),
+        Some((s, i)) => converged.find(|l| l.step + 1 == s && l.increment == i),
+        None => converged.max_by_key(|l| (l.step, l.increment)),
     }
     .ok_or_else(|| {
         FemError::Output(format!(
@@ -652,34 +801,64 @@ mod tests {
         assert_eq!(csv_field(""), "");
     }
 
+    /// `newton.csv` round trips: a converged increment after two failed attempts (an outcome
+    /// with a comma and quotes, so quoted), another step; the older form (converged increments
+    /// only, no load factor) is still read; a malformed row or a stray quote is named by line.
     #[test]
     fn newton_table_round_trips() {
         let dir = std::env::temp_dir().join(format!("tricontact-report-{}", std::process::id()));
         std::fs::create_dir_all(&dir).expect("temp dir");
+        let log = |step, increment, load_factor, relative: &[f64], outcome: &str| NewtonLog {
+            step,
+            increment,
+            load_factor,
+            relative: relative.to_vec(),
+            outcome: outcome.to_string(),
+        };
         let rec = RunRecord {
             newton: vec![
-                NewtonLog {
-                    step: 0,
-                    increment: 1,
-                    relative: vec![1.0, 1e-3, 1e-9],
-                },
-                NewtonLog {
-                    step: 1,
-                    increment: 1,
-                    relative: vec![1.0, 2e-12],
-                },
+                log(0, 1, 0.5, &[1.0, 3.0, 7.5], "cut back: element 9 inverted"),
+                log(0, 1, 0.25, &[1.0, 2.0], "failed: a, \"b\"; retried"),
+                log(0, 1, 0.25, &[1.0, 1e-3, 1e-9], CONVERGED),
+                log(1, 1, 1.0, &[1.0, 2e-12], CONVERGED),
             ],
             ..RunRecord::default()
         };
         rec.write_tables(&dir).expect("tables");
+        let text = std::fs::read_to_string(dir.join("newton.csv")).expect("read");
+        assert!(
+            text.contains(",\"failed: a, \"\"b\"\"; retried\"\n"),
+            "{text}"
+        );
         assert_eq!(read_newton(&dir).expect("read"), rec.newton);
+        // A run's last converged increment is the one plotted.
+        let series = folder_series(&dir, None).expect("series");
+        assert!(series.label.ends_with("(step 2 inc 1)"), "{}", series.label);
+        assert!(folder_series(&dir, Some((1, 1))).is_ok());
         std::fs::write(
             dir.join("newton.csv"),
-            "step,increment,iteration,relative_residual\n1,x,0,1\n",
+            "step,increment,iteration,relative_residual\n1,1,0,1\n1,1,1,1e-9\n",
         )
         .expect("write");
-        let e = read_newton(&dir).expect_err("malformed").to_string();
-        assert!(e.contains("newton.csv:2"), "{e}");
+        let older = read_newton(&dir).expect("older form");
+        assert_eq!(older.len(), 1);
+        assert!(older[0].converged() && older[0].load_factor.is_nan());
+        assert_eq!(older[0].relative, [1.0, 1e-9]);
+        for (rows, line) in [
+            ("step,increment,iteration,relative_residual\n1,x,0,1\n", 2),
+            (
+                &format!("{NEWTON_HEADER}\n1,1,0.5,0,1,converged\n1,1,0.5,1,2,a\"b\n"),
+                3,
+            ),
+            (
+                &format!("{NEWTON_HEADER}\n1,1,0.5,0,1,converged\n1,1,0.5,2,2,converged\n"),
+                3,
+            ),
+        ] {
+            std::fs::write(dir.join("newton.csv"), rows).expect("write");
+            let e = read_newton(&dir).expect_err("malformed").to_string();
+            assert!(e.contains(&format!("newton.csv:{line}")), "{e}");
+        }
         std::fs::remove_dir_all(&dir).ok();
     }
 }
