@@ -58,7 +58,8 @@ enum Command {
         #[arg(long)]
         mesh: Option<PathBuf>,
         /// Print a line per increment (iterations, relative residuals) and, with contact, one per
-        /// Newton iteration (closed nodes, status and facet changes).
+        /// Newton iteration (closed nodes, status and facet changes); the same for each failed
+        /// attempt.
         #[arg(long)]
         verbose: bool,
         /// Worker threads for assembly and factorization (default: all cores).
@@ -248,7 +249,7 @@ fn residual_list(relative: &[f64]) -> String {
 }
 
 /// The verbose lines of a failed attempt: what it aimed at, its outcome and why, then its
-/// relative residuals when it had any.
+/// relative residuals when it had any and the extra terms' note of each iteration.
 fn attempt_lines(head: &str, outcome: &str, a: &driver::Attempt) -> Vec<String> {
     let mut lines = vec![format!("{head} {outcome}: {a}")];
     if !a.residuals.is_empty() {
@@ -257,7 +258,16 @@ fn attempt_lines(head: &str, outcome: &str, a: &driver::Attempt) -> Vec<String> 
             residual_list(&a.residuals)
         ));
     }
+    lines.extend(note_lines(&a.notes));
     lines
+}
+
+/// The verbose lines of the extra terms' notes, one per iteration.
+fn note_lines(notes: &[String]) -> impl Iterator<Item = String> + '_ {
+    notes
+        .iter()
+        .enumerate()
+        .map(|(k, note)| format!("    iteration {k}: {note}"))
 }
 
 /// The verbose log of a converged increment that started at load factor `previous`: the attempts
@@ -281,9 +291,7 @@ fn verbose_lines(info: &IncrementInfo<'_>, previous: f64) -> Vec<String> {
         })
         .collect();
     lines.push(increment_line(info, previous));
-    for (k, note) in info.notes.iter().enumerate() {
-        lines.push(format!("    iteration {k}: {note}"));
-    }
+    lines.extend(note_lines(info.notes));
     lines
 }
 

@@ -570,6 +570,18 @@ fn verbose_log_names_each_cut_back_attempt() {
         .collect();
     let failed: Vec<&NewtonLog> = logs.iter().filter(|l| !l.converged()).collect();
     assert_eq!(failed.len(), attempts.len(), "{failed:?}");
+    // Each attempt's line is followed by its residuals and its contact note per iteration.
+    let lines: Vec<&str> = stdout.lines().collect();
+    for (k, line) in lines.iter().enumerate() {
+        if line.contains("cut back:") {
+            assert!(
+                lines[k + 1].starts_with("    rel. residuals [")
+                    && lines[k + 2].starts_with("    iteration 0: contact: "),
+                "{:?}",
+                &lines[k..k + 3]
+            );
+        }
+    }
     for (k, f) in logs.iter().enumerate() {
         if f.converged() {
             continue;

@@ -99,6 +99,8 @@ pub struct Attempt {
     /// Lagrangian, the solves of successive updates after each other); empty when it failed
     /// before its first residual.
     pub residuals: Vec<f64>,
+    /// The extra terms' note of each of its iterations (see [`IncrementInfo::notes`]).
+    pub notes: Vec<String>,
 }
 
 /// How a failed attempt was followed up.
@@ -506,6 +508,7 @@ fn run_step(
                     reason: failed.failure.to_string(),
                     retry: Retry::LineSearch,
                     residuals: failed.relative(),
+                    notes: failed.notes,
                 });
             }
             Err(failed) => {
@@ -599,7 +602,7 @@ fn cut_back(
 ) -> Result<()> {
     let step = problem.step;
     let residuals = failed.relative();
-    let failure = failed.failure;
+    let (failure, notes) = (failed.failure, failed.notes);
     let hint = failure_hint(&failure, extra, problem.dm);
     extra.restore();
     if let (Failure::Singular(m), false) = (&failure, step.nlgeom) {
@@ -614,6 +617,7 @@ fn cut_back(
         reason: failure.to_string(),
         retry: Retry::CutBack,
         residuals,
+        notes,
     });
     if control.failed() {
         return Ok(());
@@ -708,6 +712,7 @@ fn solve_with_outer(
         failure: Failure::Diverged(failure),
         residuals: c.map_or_else(Vec::new, |c| c.residuals.clone()),
         reference: c.map_or(0.0, |c| c.reference),
+        notes: c.map_or_else(Vec::new, |c| c.notes.clone()),
     };
     extra.begin_increment(u0).map_err(|e| failed(e, None))?;
     let mut c = solve_increment(problem, extra, u0, start, solver)?;
@@ -733,6 +738,9 @@ fn solve_with_outer(
                 let mut residuals = std::mem::take(&mut c.residuals);
                 residuals.append(&mut f.residuals);
                 f.residuals = residuals;
+                let mut notes = std::mem::take(&mut c.notes);
+                notes.append(&mut f.notes);
+                f.notes = notes;
                 f.reference = f.reference.max(c.reference);
                 return Err(f);
             }

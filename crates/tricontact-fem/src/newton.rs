@@ -82,6 +82,8 @@ pub struct Failed {
     pub residuals: Vec<f64>,
     /// Reference norm of the relative test when it failed.
     pub reference: f64,
+    /// Notes of the extra terms per assembly, as [`Converged::notes`].
+    pub notes: Vec<String>,
 }
 
 impl Failed {
@@ -252,6 +254,7 @@ pub fn solve_increment(
             failure,
             residuals: it.residuals,
             reference: it.reference,
+            notes: it.notes,
         }),
     }
 }
