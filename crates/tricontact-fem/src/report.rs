@@ -122,7 +122,8 @@ fn attempt_logs(
                 increment,
                 load_factor: a.target,
                 relative: a.residuals.clone(),
-                outcome: format!("{kind}: {a}"),
+                // One line per row: a line break in a reason would split it.
+                outcome: format!("{kind}: {a}").replace(['\r', '\n'], " "),
             }
         })
         .collect()
@@ -223,7 +224,7 @@ impl RunRecord {
             for (k, r) in log.relative.iter().enumerate() {
                 let _ = writeln!(
                     csv,
-                    "{},{},{:e},{k},{r:e},{outcome}",
+                    "{},{},{},{k},{r:e},{outcome}",
                     log.step + 1,
                     log.increment,
                     log.load_factor
@@ -799,6 +800,38 @@ mod tests {
         assert_eq!(csv_field("a \"b\""), "\"a \"\"b\"\"\"");
         assert_eq!(csv_field("a\r\nb"), "\"a\r\nb\"");
         assert_eq!(csv_field(""), "");
+    }
+
+    /// Failed attempts are labelled by what followed them (the last of a stopped run `failed`)
+    /// and their outcome is one line, whatever their reason holds.
+    #[test]
+    fn attempts_are_labelled_and_kept_on_one_line() {
+        let attempt = |retry, reason: &str| Attempt {
+            target: 0.5,
+            reason: reason.to_string(),
+            retry,
+            residuals: vec![1.0, 2.0],
+            notes: Vec::new(),
+        };
+        let attempts = [
+            attempt(Retry::LineSearch, "element 3 inverted"),
+            attempt(Retry::CutBack, "no convergence\nin 20 iterations\r"),
+            attempt(Retry::CutBack, "element 4 inverted"),
+        ];
+        let outcomes = |stopped| -> Vec<String> {
+            attempt_logs(1, 2, &attempts, stopped)
+                .into_iter()
+                .map(|l| l.outcome)
+                .collect()
+        };
+        let running = outcomes(false);
+        assert!(
+            running[0].starts_with("failed: element 3 inverted; retried"),
+            "{running:?}"
+        );
+        assert_eq!(running[1], "cut back: no convergence in 20 iterations ");
+        assert_eq!(running[2], "cut back: element 4 inverted");
+        assert_eq!(outcomes(true)[2], "failed: element 4 inverted");
     }
 
     /// `newton.csv` round trips: a converged increment after two failed attempts (an outcome
