@@ -90,7 +90,8 @@ enum Command {
         /// Result folders written by `tricontact run` (each holds `newton.csv`).
         #[arg(required = true)]
         folders: Vec<PathBuf>,
-        /// Increment to compare, `STEP:INCREMENT` (1-based; default: the last of each run).
+        /// Increment to compare, `STEP:INCREMENT` (1-based; default: the last converged one of
+        /// each run).
         #[arg(long, value_parser = parse_increment)]
         increment: Option<(usize, usize)>,
         /// Output PNG.
@@ -252,10 +253,10 @@ fn residual_list(relative: &[f64]) -> String {
 /// relative residuals when it had any and the extra terms' note of each iteration.
 fn attempt_lines(head: &str, outcome: &str, a: &driver::Attempt) -> Vec<String> {
     let mut lines = vec![format!("{head} {outcome}: {a}")];
-    if !a.residuals.is_empty() {
+    if !a.relative.is_empty() {
         lines.push(format!(
             "    rel. residuals [{}]",
-            residual_list(&a.residuals)
+            residual_list(&a.relative)
         ));
     }
     lines.extend(note_lines(&a.notes));
@@ -277,10 +278,7 @@ fn verbose_lines(info: &IncrementInfo<'_>, previous: f64) -> Vec<String> {
         .attempts
         .iter()
         .flat_map(|a| {
-            let outcome = match a.retry {
-                driver::Retry::CutBack => "cut back",
-                driver::Retry::LineSearch => "failed",
-            };
+            let outcome = a.label(false);
             let head = format!(
                 "step {} '{}' attempt t = {}",
                 info.step + 1,
@@ -295,8 +293,8 @@ fn verbose_lines(info: &IncrementInfo<'_>, previous: f64) -> Vec<String> {
     lines
 }
 
-/// The verbose log of the increment a run failed on: each attempt and why it failed (none for
-/// other errors).
+/// The verbose log of the increment a run failed on: each attempt, what became of it (cut back,
+/// or the last one failed) and why (none for other errors).
 fn failed_attempts(an: &Analysis, e: &FemError) -> Vec<String> {
     let FemError::NotConverged {
         step,
@@ -314,11 +312,13 @@ fn failed_attempts(an: &Analysis, e: &FemError) -> Vec<String> {
         .map_or(0, |i| i + 1);
     attempts
         .iter()
-        .flat_map(|a| {
+        .enumerate()
+        .flat_map(|(k, a)| {
             let t = load_factor_text(a.target, a.target - load_factor, 4);
+            let outcome = a.label(k + 1 == attempts.len());
             attempt_lines(
                 &format!("step {number} '{step}' attempt t = {t}"),
-                "failed",
+                outcome,
                 a,
             )
         })

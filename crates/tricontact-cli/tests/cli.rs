@@ -270,7 +270,7 @@ fn hertz_coarse_writes_tables_plots_and_summary() {
         .expect("runs");
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(
-        !o.status.success() && stderr.contains("no increment 99 of step 1"),
+        !o.status.success() && stderr.contains("no converged increment 99 of step 1"),
         "{stderr}"
     );
     let o = bin()
@@ -671,12 +671,27 @@ fn verbose_log_lists_the_attempts_of_a_failed_increment() {
         .expect("runs");
     assert_eq!(run.status.code(), Some(1));
     let stdout = String::from_utf8_lossy(&run.stdout);
-    let failed: Vec<&str> = stdout.lines().filter(|l| l.contains("failed:")).collect();
-    let targets: Vec<&str> = failed
-        .iter()
-        .filter_map(|l| l.split("t = ").nth(1)?.split(' ').next())
+    let failed: Vec<&str> = stdout
+        .lines()
+        .filter(|l| l.contains(" attempt t = "))
         .collect();
-    assert_eq!(targets, ["0.2500", "0.1250", "0.0625"], "{stdout}");
+    let targets: Vec<(&str, &str)> = failed
+        .iter()
+        .filter_map(|l| {
+            let (t, outcome) = l.split("t = ").nth(1)?.split_once(' ')?;
+            Some((t, outcome.split(':').next()?))
+        })
+        .collect();
+    // Labelled as in newton.csv: the first two cut back, the last failed.
+    assert_eq!(
+        targets,
+        [
+            ("0.2500", "cut back"),
+            ("0.1250", "cut back"),
+            ("0.0625", "failed")
+        ],
+        "{stdout}"
+    );
     assert!(
         failed
             .iter()

@@ -95,10 +95,11 @@ pub struct Attempt {
     pub reason: String,
     /// What came after it.
     pub retry: Retry,
-    /// Its relative residuals: the predictor's, then each iteration's (with the augmented
-    /// Lagrangian, the solves of successive updates after each other); empty when it failed
-    /// before its first residual.
-    pub residuals: Vec<f64>,
+    /// Its relative residuals (residual norms divided by the reference norm of the relative
+    /// test, as [`IncrementInfo::relative_residuals`]): the predictor's, then each iteration's
+    /// (with the augmented Lagrangian, the solves of successive updates after each other); empty
+    /// when it failed at its first assembly.
+    pub relative: Vec<f64>,
     /// The extra terms' note of each of its iterations (see [`IncrementInfo::notes`]).
     pub notes: Vec<String>,
 }
@@ -111,6 +112,20 @@ pub enum Retry {
     /// The same increment with the line search, on for the rest of the step
     /// (`line_search = "auto"`); not a cutback.
     LineSearch,
+}
+
+impl Attempt {
+    /// What became of the attempt, as the verbose log and `newton.csv` name it: `cut back` when a
+    /// smaller increment followed, `failed` when it was retried with the line search or it
+    /// ended the run (`ended_run`).
+    #[must_use]
+    pub fn label(&self, ended_run: bool) -> &'static str {
+        match self.retry {
+            _ if ended_run => "failed",
+            Retry::CutBack => "cut back",
+            Retry::LineSearch => "failed",
+        }
+    }
 }
 
 impl std::fmt::Display for Attempt {
@@ -507,7 +522,7 @@ fn run_step(
                     target: t_new,
                     reason: failed.failure.to_string(),
                     retry: Retry::LineSearch,
-                    residuals: failed.relative(),
+                    relative: failed.relative(),
                     notes: failed.notes,
                 });
             }
@@ -601,7 +616,7 @@ fn cut_back(
     attempts: &mut Vec<Attempt>,
 ) -> Result<()> {
     let step = problem.step;
-    let residuals = failed.relative();
+    let relative = failed.relative();
     let (failure, notes) = (failed.failure, failed.notes);
     let hint = failure_hint(&failure, extra, problem.dm);
     extra.restore();
@@ -616,7 +631,7 @@ fn cut_back(
         target: t_new,
         reason: failure.to_string(),
         retry: Retry::CutBack,
-        residuals,
+        relative,
         notes,
     });
     if control.failed() {

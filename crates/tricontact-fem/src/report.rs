@@ -11,7 +11,8 @@
 //!   [`crate::hertz`]; a cell is empty where its value is undefined: no fit with fewer than three
 //!   closed nodes, no relative error without force), `hertz_profile.csv` — `r, p, p_hertz` of
 //!   the last increment;
-//! * `newton.png` (relative residual per iteration, log scale, the last eight increments),
+//! * `newton.png` (relative residual per iteration, log scale, the last eight converged
+//!   increments),
 //!   `contact_force.png` (normal force of each pair against time), `hertz_pressure.png` (nodal
 //!   pressure against `r` with Hertz and the fitted profile) and `hertz_force_approach.png`
 //!   (measured approach, approach minus the fitted linear term `c F`, and Hertz's `δ(F)`).
@@ -26,7 +27,7 @@ use std::path::{Path, PathBuf};
 
 use crate::analysis::Analysis;
 use crate::atomic::write_atomic;
-use crate::driver::{Attempt, IncrementInfo, Retry};
+use crate::driver::{Attempt, IncrementInfo};
 use crate::error::{FemError, Result};
 use crate::hertz::{HertzSample, HertzSetup, fit_approach};
 use crate::plots::{Axes, Series, chart, check_png};
@@ -112,16 +113,12 @@ fn attempt_logs(
         .iter()
         .enumerate()
         .map(|(k, a)| {
-            let kind = match a.retry {
-                _ if stopped && k + 1 == attempts.len() => "failed",
-                Retry::CutBack => "cut back",
-                Retry::LineSearch => "failed",
-            };
+            let kind = a.label(stopped && k + 1 == attempts.len());
             NewtonLog {
                 step,
                 increment,
                 load_factor: a.target,
-                relative: a.residuals.clone(),
+                relative: a.relative.clone(),
                 // One line per row: a line break in a reason would split it.
                 outcome: format!("{kind}: {a}").replace(['\r', '\n'], " "),
             }
@@ -670,10 +667,19 @@ fn folder_series(dir: &Path, pick: Option<(usize, usize)>) -> Result<Series> {
         None => converged.max_by_key(|l| (l.step, l.increment)),
     }
     .ok_or_else(|| {
+        // Failed attempts are not plotted; say so where the file has them.
+        let failed = logs
+            .iter()
+            .filter(|l| pick.is_none_or(|(s, i)| l.step + 1 == s && l.increment == i))
+            .count();
+        let which = pick.map_or(String::new(), |(s, i)| format!(" {i} of step {s}"));
+        let attempts = match failed {
+            0 => String::new(),
+            n => format!(" (only {n} failed attempt(s), which are not plotted)"),
+        };
         FemError::Output(format!(
-            "{}: no increment {} in newton.csv",
-            dir.display(),
-            pick.map_or("(empty file)".into(), |(s, i)| format!("{i} of step {s}"))
+            "{}: no converged increment{which} in newton.csv{attempts}",
+            dir.display()
         ))
     })?;
     let mut series = newton_series(log);
@@ -806,11 +812,12 @@ mod tests {
     /// and their outcome is one line, whatever their reason holds.
     #[test]
     fn attempts_are_labelled_and_kept_on_one_line() {
+        use crate::driver::Retry;
         let attempt = |retry, reason: &str| Attempt {
             target: 0.5,
             reason: reason.to_string(),
             retry,
-            residuals: vec![1.0, 2.0],
+            relative: vec![1.0, 2.0],
             notes: Vec::new(),
         };
         let attempts = [
@@ -868,6 +875,26 @@ mod tests {
         let series = folder_series(&dir, None).expect("series");
         assert!(series.label.ends_with("(step 2 inc 1)"), "{}", series.label);
         assert!(folder_series(&dir, Some((1, 1))).is_ok());
+        // A run that stopped before any increment converged: its attempts are named, not drawn.
+        let stopped = RunRecord {
+            newton: rec.newton[..2].to_vec(),
+            ..RunRecord::default()
+        };
+        stopped.write_tables(&dir).expect("tables");
+        let e = folder_series(&dir, None)
+            .expect_err("nothing converged")
+            .to_string();
+        assert!(
+            e.ends_with("no converged increment in newton.csv (only 2 failed attempt(s), which are not plotted)"),
+            "{e}"
+        );
+        let e = folder_series(&dir, Some((1, 2)))
+            .expect_err("no such increment")
+            .to_string();
+        assert!(
+            e.ends_with("no converged increment 2 of step 1 in newton.csv"),
+            "{e}"
+        );
         std::fs::write(
             dir.join("newton.csv"),
             "step,increment,iteration,relative_residual\n1,1,0,1\n1,1,1,1e-9\n",

@@ -11,10 +11,10 @@ use std::path::{Path, PathBuf};
 
 use tricontact_fem::analysis::Analysis;
 use tricontact_fem::assembly::NoExtra;
-use tricontact_fem::driver::run;
+use tricontact_fem::driver::{Attempt, Retry, run};
 use tricontact_fem::mesh::ElementKind;
 use tricontact_fem::output::ResultWriter;
-use tricontact_fem::report::{RunRecord, compare_newton};
+use tricontact_fem::report::{RunRecord, compare_newton, read_newton};
 use tricontact_fem::structured::box_mesh;
 use tricontact_fem::{FemError, Result};
 
@@ -113,6 +113,57 @@ fn failed_run_leaves_only_its_own_files() {
     assert!(
         newton.lines().skip(1).all(|l| l.starts_with("1,1,")),
         "{newton}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The attempts of the increment a run stopped on follow its converged increments in
+/// `newton.csv`, numbered as the next increment of their step; an error that is not a step's
+/// failure to converge adds nothing.
+#[test]
+fn the_attempts_a_run_stopped_on_follow_its_increments() {
+    let an = analysis(&model());
+    let dir = fresh_dir("stopped-attempts");
+    let mut record = RunRecord::new(None);
+    run(&an, &mut NoExtra, &mut |info| {
+        record.record(&an, info);
+        Ok(())
+    })
+    .expect("the run converges");
+    let attempt = |target, retry| Attempt {
+        target,
+        reason: format!("no convergence at {target}"),
+        retry,
+        relative: vec![1.0, 0.5, 0.4],
+        notes: Vec::new(),
+    };
+    let stop = FemError::NotConverged {
+        step: "pull".into(),
+        load_factor: 1.0,
+        target: 1.25,
+        reason: "no convergence".into(),
+        exhausted: "after 1 cutback".into(),
+        attempts: vec![attempt(1.5, Retry::CutBack), attempt(1.25, Retry::CutBack)],
+    };
+    record.record_failure(&an, &FemError::Output("disk full".into()));
+    record.record_failure(&an, &stop);
+    record.write_tables(&dir).expect("tables");
+    let logs = read_newton(&dir).expect("newton.csv");
+    let summary: Vec<(usize, usize, f64, &str)> = logs
+        .iter()
+        .map(|l| (l.step, l.increment, l.load_factor, l.outcome.as_str()))
+        .collect();
+    assert_eq!(summary.len(), 5, "{summary:?}");
+    assert!(
+        summary[..3].iter().all(|s| s.3 == "converged"),
+        "{summary:?}"
+    );
+    assert_eq!(
+        summary[3..],
+        [
+            (0, 4, 1.5, "cut back: no convergence at 1.5"),
+            (0, 4, 1.25, "failed: no convergence at 1.25")
+        ]
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
