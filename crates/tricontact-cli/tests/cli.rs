@@ -93,7 +93,11 @@ fn failures_exit_non_zero_with_one_line() {
     std::fs::copy(mesh, d.join("beam.msh")).expect("copy");
     let good = std::fs::read_to_string(example()).expect("model");
     let cases = [
-        ("syntax.toml", good.replace("[[body]]", "[[body]"), "line"),
+        (
+            "syntax.toml",
+            good.replace("[[body]]", "[[body]"),
+            "syntax.toml:",
+        ),
         (
             "group.toml",
             good.replace("group = \"tip\"", "group = \"tipp\""),
@@ -317,7 +321,8 @@ fn hertz_table_errors_name_the_key() {
         &format!("file = {:?}", mesh.to_str().expect("utf8")),
     );
     // Each case: the change, the message, and the line it must point at (the first line that
-    // starts with the given text; `None`: a syntax error, which gives its own line and column).
+    // starts with the given text; `None`: a schema error, at the first line that starts with
+    // the unknown key, column 1).
     for (from, to, expect, key) in [
         (
             "loaded = \"top\"",
@@ -380,15 +385,15 @@ fn hertz_table_errors_name_the_key() {
         let model = out.join("bad.toml");
         let text = base.replacen(from, to, 1);
         std::fs::write(&model, &text).expect("write");
+        let line_of = |key: &str| {
+            1 + text
+                .lines()
+                .position(|l| l.starts_with(key))
+                .expect("key in the model")
+        };
         let expect = match key {
-            Some(key) => {
-                let line = 1 + text
-                    .lines()
-                    .position(|l| l.starts_with(key))
-                    .expect("key in the model");
-                format!("{}:{line}: {expect}", model.display())
-            }
-            None => expect.to_string(),
+            Some(key) => format!("{}:{}: {expect}", model.display(), line_of(key)),
+            None => format!("{}:{}:1: {expect}", model.display(), line_of("radious")),
         };
         for cmd in ["check", "run"] {
             let (ok, text, stderr) = outcome(cmd, &model);

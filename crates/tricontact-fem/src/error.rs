@@ -17,12 +17,16 @@ pub enum FemError {
         /// The operating-system error.
         source: std::io::Error,
     },
-    /// The model file is not valid TOML or does not match the schema.
-    #[error("{path}: {message}")]
+    /// The model file is not valid TOML or does not match the schema: `invalid model:
+    /// <file>:<line>:<column>: <message>`, as the model's other problems read (and as editors
+    /// and terminals take a place in a file).
+    #[error("invalid model: {path}{at}: {message}")]
     ModelSyntax {
         /// The model file.
         path: PathBuf,
-        /// Parser message, including line and column.
+        /// Where in it: `:line:column`, `:line`, or empty.
+        at: String,
+        /// Parser message.
         message: String,
     },
     /// The mesh file could not be parsed.

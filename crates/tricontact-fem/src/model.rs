@@ -480,6 +480,7 @@ impl Model {
         if !meta.is_file() {
             return Err(FemError::ModelSyntax {
                 path: path.to_path_buf(),
+                at: String::new(),
                 message: "not a regular file (a model is a .toml file)".into(),
             });
         }
@@ -523,12 +524,13 @@ impl Model {
                 .span()
                 .map(|s| {
                     let (line, col) = line_col(text, s.start);
-                    format!("line {line}, column {col}: ")
+                    format!(":{line}:{col}")
                 })
                 .unwrap_or_default();
             FemError::ModelSyntax {
                 path: path.to_path_buf(),
-                message: format!("{at}{message}"),
+                at,
+                message,
             }
         })?;
         model.source = SourceMap::new(text, path);
@@ -536,13 +538,14 @@ impl Model {
             let at = model
                 .source
                 .line("mesh", 0, "file")
-                .map(|n| format!("line {n}: "))
+                .map(|n| format!(":{n}"))
                 .unwrap_or_default();
             return Err(FemError::ModelSyntax {
                 path: path.to_path_buf(),
-                message: format!(
-                    "{at}[mesh] file is empty (give the .msh file, relative to the model's folder)"
-                ),
+                at,
+                message:
+                    "[mesh] file is empty (give the .msh file, relative to the model's folder)"
+                        .into(),
             });
         }
         Ok(model)
@@ -711,7 +714,7 @@ nlgeom = true
         let e = Model::parse(&with("base64"), Path::new("m.toml")).expect_err("bad value");
         let msg = e.to_string();
         assert!(
-            msg.contains("base64") && msg.contains("ascii") && msg.contains("line"),
+            msg.contains("base64") && msg.contains("ascii") && msg.contains("m.toml:25:"),
             "{msg}"
         );
     }
@@ -739,7 +742,7 @@ nlgeom = true
             let e = Model::parse(&with(bad), Path::new("m.toml")).expect_err("bad value");
             let msg = e.to_string();
             assert!(
-                msg.contains("true, false or \"auto\"") && msg.contains("line 24"),
+                msg.contains("true, false or \"auto\"") && msg.contains("m.toml:24:"),
                 "{msg}"
             );
         }
@@ -760,7 +763,7 @@ nlgeom = true
         let e = Model::parse(&bad, Path::new("m.toml")).expect_err("unknown key");
         let msg = e.to_string();
         assert!(msg.contains("incremnets"), "{msg}");
-        assert!(msg.contains("line 22, column 1"), "{msg}");
+        assert!(msg.contains(".toml:22:1: "), "{msg}");
     }
 
     #[test]
@@ -771,7 +774,7 @@ nlgeom = true
                 .expect_err("not three")
                 .to_string();
             assert!(
-                msg.contains("an array of 3 numbers") && msg.contains("line 26, column 9"),
+                msg.contains("an array of 3 numbers") && msg.contains(".toml:26:9: "),
                 "{msg}"
             );
         }
@@ -784,7 +787,7 @@ nlgeom = true
     fn a_byte_order_mark_is_not_a_column() {
         let text = "\u{feff}bogus = 1\n";
         let e = Model::parse(text, Path::new("m.toml")).expect_err("unknown key");
-        assert!(e.to_string().contains("line 1, column 1"), "{e}");
+        assert!(e.to_string().contains(".toml:1:1: "), "{e}");
         assert_eq!(line_col(text, text.len()), (2, 1));
     }
 
@@ -793,7 +796,7 @@ nlgeom = true
         let bad = "[mesh]\nfile = \"a.msh\"\n[[material]\nname = 1\n";
         let e = Model::parse(bad, Path::new("m.toml")).expect_err("syntax");
         let msg = e.to_string();
-        assert!(msg.contains("line 3, column"), "{msg}");
+        assert!(msg.contains(".toml:3:"), "{msg}");
         assert!(!msg.contains('\n'));
     }
 }

@@ -51,7 +51,8 @@ pub fn check(text: &str, path: &Path) -> Result<()> {
             let (line, col) = line_col(text, value.span().start);
             return Err(FemError::ModelSyntax {
                 path: path.to_path_buf(),
-                message: format!("line {line}, column {col}: {problem}"),
+                at: format!(":{line}:{col}"),
+                message: problem,
             });
         }
     }
@@ -123,22 +124,16 @@ mod tests {
     fn a_single_table_written_as_a_list_names_its_form_and_line() {
         let e =
             problem("[mesh]\nfile = \"a.msh\"\n\n[[output]]\nfolder = \"r\"\n").expect("a problem");
-        assert!(
-            e.contains("line 4, column 1: [[output]] is a list of tables"),
-            "{e}"
-        );
+        assert!(e.contains(":4:1: [[output]] is a list of tables"), "{e}");
         assert!(e.contains("write [output] (single brackets)"), "{e}");
         let e = problem("mesh = [\"a.msh\"]\n").expect("a problem");
-        assert!(
-            e.contains("line 1, column 8: `mesh` must be the table [mesh]"),
-            "{e}"
-        );
+        assert!(e.contains(":1:8: `mesh` must be the table [mesh]"), "{e}");
     }
 
     #[test]
     fn a_list_written_as_one_table_or_as_bare_values_names_its_form_and_line() {
         let e = problem("[mesh]\nfile = \"a.msh\"\n[step]\nname = \"a\"\n").expect("a problem");
-        assert!(e.contains("line 3, column 1: [step] is one table"), "{e}");
+        assert!(e.contains(":3:1: [step] is one table"), "{e}");
         assert!(
             e.contains("write [[step]] (double brackets), once per step"),
             "{e}"
@@ -146,7 +141,7 @@ mod tests {
         let e =
             problem("material = [[\"steel\", \"neo_hooke\", 210e3, 0.3]]\n").expect("a problem");
         assert!(
-            e.contains("line 1, column 12: each material must be a table of named keys"),
+            e.contains(":1:12: each material must be a table of named keys"),
             "{e}"
         );
     }

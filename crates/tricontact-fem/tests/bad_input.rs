@@ -67,7 +67,10 @@ fn malformed_toml_reports_line_and_column() {
     let e = Model::load(&p).expect_err("malformed");
     let msg = e.to_string();
     assert!(matches!(e, FemError::ModelSyntax { .. }));
-    assert!(msg.contains("line 4, column"), "{msg}");
+    assert!(
+        msg.starts_with("invalid model: ") && msg.contains(".toml:4:"),
+        "{msg}"
+    );
     // Wrong value type, with position too.
     let p = setup(
         "toml2",
@@ -75,7 +78,7 @@ fn malformed_toml_reports_line_and_column() {
         &model_text("solid", "").replace("E = 1.0", "E = \"stiff\""),
     );
     let msg = Model::load(&p).expect_err("type").to_string();
-    assert!(msg.contains("line 6, column 5"), "{msg}");
+    assert!(msg.contains(".toml:6:5: "), "{msg}");
 }
 
 #[test]
@@ -444,11 +447,11 @@ fn a_duplicate_key_is_named() {
     for (text, expected) in [
         (
             "[mesh]\nfile = \"a.msh\"\nfile = \"b.msh\"\n",
-            "line 3, column 1: duplicate key `file`",
+            "m.toml:3:1: duplicate key `file`",
         ),
         (
             "[mesh]\nfile = \"a.msh\"\n[mesh]\n",
-            "line 3, column 2: duplicate key `mesh`",
+            "m.toml:3:2: duplicate key `mesh`",
         ),
     ] {
         let e = tricontact_fem::model::Model::parse(text, std::path::Path::new("m.toml"))
@@ -620,7 +623,7 @@ fn a_displacement_array_is_refused() {
     let extra = "[[boundary]]\ngroup = \"solid\"\ndisplacement = [0.1, 0.2, 0.3, 0.4]\n";
     let e = Model::parse(&model_text("solid", extra), Path::new("m.toml")).expect_err("array");
     let msg = e.to_string();
-    assert!(msg.contains("m.toml: line 13"), "{msg}");
+    assert!(msg.contains("m.toml:13:"), "{msg}");
     assert!(msg.contains("a table of components"), "{msg}");
 }
 
@@ -631,8 +634,7 @@ fn an_empty_mesh_file_is_named() {
     let text = model_text("solid", "").replace("file = \"m.msh\"", "file = \"\"");
     let e = Model::parse(&text, Path::new("m.toml")).expect_err("empty file");
     assert!(
-        e.to_string()
-            .contains("m.toml: line 2: [mesh] file is empty"),
+        e.to_string().contains("m.toml:2: [mesh] file is empty"),
         "{e}"
     );
 }
