@@ -62,6 +62,9 @@ pub struct IncrementInfo<'a> {
     pub line_searches: usize,
     /// Residual norms (predictor, then each iteration).
     pub residuals: &'a [f64],
+    /// Where each Newton solve starts in `residuals` (`[0]` for one; the augmented Lagrangian's
+    /// successive solves follow each other).
+    pub solve_starts: &'a [usize],
     /// Reference norm of the relative residual test.
     pub reference: f64,
     /// Cutbacks taken before this increment converged.
@@ -100,6 +103,8 @@ pub struct Attempt {
     /// (with the augmented Lagrangian, the solves of successive updates after each other); empty
     /// when it failed at its first assembly.
     pub relative: Vec<f64>,
+    /// Where each Newton solve starts in `relative` (see [`IncrementInfo::solve_starts`]).
+    pub solve_starts: Vec<usize>,
     /// The extra terms' note of each of its iterations (see [`IncrementInfo::notes`]).
     pub notes: Vec<String>,
 }
@@ -523,6 +528,7 @@ fn run_step(
                     reason: failed.failure.to_string(),
                     retry: Retry::LineSearch,
                     relative: failed.relative(),
+                    solve_starts: failed.solve_starts,
                     notes: failed.notes,
                 });
             }
@@ -588,6 +594,7 @@ fn commit(
         iterations: c.iterations,
         line_searches: c.line_searches,
         residuals: &c.residuals,
+        solve_starts: &c.solve_starts,
         reference: c.reference,
         cutbacks: at.cutbacks,
         u: &summary.u,
@@ -617,7 +624,7 @@ fn cut_back(
 ) -> Result<()> {
     let step = problem.step;
     let relative = failed.relative();
-    let (failure, notes) = (failed.failure, failed.notes);
+    let (failure, notes, solve_starts) = (failed.failure, failed.notes, failed.solve_starts);
     let hint = failure_hint(&failure, extra, problem.dm);
     extra.restore();
     if let (Failure::Singular(m), false) = (&failure, step.nlgeom) {
@@ -632,6 +639,7 @@ fn cut_back(
         reason: failure.to_string(),
         retry: Retry::CutBack,
         relative,
+        solve_starts,
         notes,
     });
     if control.failed() {
@@ -726,6 +734,7 @@ fn solve_with_outer(
     let failed = |failure: String, c: Option<&Converged>| Failed {
         failure: Failure::Diverged(failure),
         residuals: c.map_or_else(Vec::new, |c| c.residuals.clone()),
+        solve_starts: c.map_or_else(|| vec![0], |c| c.solve_starts.clone()),
         reference: c.map_or(0.0, |c| c.reference),
         notes: c.map_or_else(Vec::new, |c| c.notes.clone()),
     };
@@ -750,6 +759,9 @@ fn solve_with_outer(
         let next = match solve_increment(problem, extra, u0, &c.u, solver) {
             Ok(next) => next,
             Err(mut f) => {
+                let mut starts = std::mem::take(&mut c.solve_starts);
+                starts.push(c.residuals.len());
+                f.solve_starts = starts;
                 let mut residuals = std::mem::take(&mut c.residuals);
                 residuals.append(&mut f.residuals);
                 f.residuals = residuals;
@@ -760,6 +772,8 @@ fn solve_with_outer(
                 return Err(f);
             }
         };
+        let mut solve_starts = std::mem::take(&mut c.solve_starts);
+        solve_starts.push(c.residuals.len());
         let mut residuals = std::mem::take(&mut c.residuals);
         residuals.extend_from_slice(&next.residuals);
         let mut notes = std::mem::take(&mut c.notes);
@@ -768,6 +782,7 @@ fn solve_with_outer(
         let line_searches = c.line_searches + next.line_searches;
         c = Converged {
             residuals,
+            solve_starts,
             notes,
             iterations,
             line_searches,

@@ -58,6 +58,9 @@ pub struct Converged {
     pub residual: Vec<f64>,
     /// Residual norms over free equations: predictor, then each iteration.
     pub residuals: Vec<f64>,
+    /// Where each Newton solve's residuals start in `residuals` (`[0]` for one solve; the
+    /// augmented Lagrangian's successive solves follow each other).
+    pub solve_starts: Vec<usize>,
     /// Reference norm used for the relative test.
     pub reference: f64,
     /// Linear solves performed.
@@ -80,6 +83,8 @@ pub struct Failed {
     /// Residual norms over free equations: predictor, then each iteration (empty when the solve
     /// failed before its first residual).
     pub residuals: Vec<f64>,
+    /// Where each Newton solve's residuals start, as [`Converged::solve_starts`].
+    pub solve_starts: Vec<usize>,
     /// Reference norm of the relative test when it failed.
     pub reference: f64,
     /// Notes of the extra terms per assembly, as [`Converged::notes`].
@@ -253,6 +258,7 @@ pub fn solve_increment(
         Err(failure) => Err(Failed {
             failure,
             residuals: it.residuals,
+            solve_starts: vec![0],
             reference: it.reference,
             notes: it.notes,
         }),
@@ -500,6 +506,7 @@ impl Iterate {
             u: self.u,
             residual,
             residuals: self.residuals,
+            solve_starts: vec![0],
             reference: self.reference,
             iterations: self.iterations,
             method: self.method,

@@ -2,9 +2,10 @@
 //! comparison, as CSV tables and (with `[output] plots = true`) PNG charts.
 //!
 //! Files (all atomic):
-//! * `newton.csv` — `step,increment,load_factor,iteration,relative_residual,outcome` for every
-//!   attempt at an increment, iteration 0 being the predictor (the residual the attempt starts
-//!   from): the attempts that failed (outcome `cut back: <why>`, or `failed: <why>` for one
+//! * `newton.csv` — `step,increment,load_factor,solve,iteration,relative_residual,outcome` for
+//!   every attempt at an increment, iteration 0 of each Newton solve being its predictor (the
+//!   residual it starts from; `solve` counts the augmented Lagrangian's successive solves of an
+//!   attempt from 1, and is 1 otherwise): the attempts that failed (outcome `cut back: <why>`, or `failed: <why>` for one
 //!   retried with the line search and for the last of a run that stopped) before the one that
 //!   converged (`converged`);
 //! * `hertz.csv` — one row per increment when the model has a `[hertz]` table (see
@@ -36,7 +37,7 @@ use crate::throttle::Throttle;
 /// `newton.csv`: the residual of every Newton iteration.
 const NEWTON_CSV: &str = "newton.csv";
 /// The header of `newton.csv`.
-const NEWTON_HEADER: &str = "step,increment,load_factor,iteration,relative_residual,outcome";
+const NEWTON_HEADER: &str = "step,increment,load_factor,solve,iteration,relative_residual,outcome";
 /// The header `newton.csv` had until 2026-12-05 (converged increments only), still read.
 const NEWTON_HEADER_V1: &str = "step,increment,iteration,relative_residual";
 /// `hertz.csv`: the Hertz comparison per increment.
@@ -86,6 +87,8 @@ pub struct NewtonLog {
     pub load_factor: f64,
     /// Relative residuals: predictor, then each iteration.
     pub relative: Vec<f64>,
+    /// Where each Newton solve starts in `relative` (`[0]` for one solve).
+    pub solve_starts: Vec<usize>,
     /// [`CONVERGED`], or how the attempt failed and what came after it.
     pub outcome: String,
 }
@@ -98,6 +101,14 @@ impl NewtonLog {
     #[must_use]
     pub fn converged(&self) -> bool {
         self.outcome == CONVERGED
+    }
+
+    /// The solve (from 1) and the iteration within it (from 0) of residual `k`.
+    #[must_use]
+    pub fn solve_of(&self, k: usize) -> (usize, usize) {
+        let solve = self.solve_starts.partition_point(|&s| s <= k).max(1);
+        let start = self.solve_starts.get(solve - 1).copied().unwrap_or(0);
+        (solve, k - start)
     }
 }
 
@@ -119,6 +130,7 @@ fn attempt_logs(
                 increment,
                 load_factor: a.target,
                 relative: a.relative.clone(),
+                solve_starts: a.solve_starts.clone(),
                 // One line per row: a line break in a reason would split it.
                 outcome: format!("{kind}: {a}").replace(['\r', '\n'], " "),
             }
@@ -161,6 +173,7 @@ impl RunRecord {
             increment,
             load_factor: info.load_factor,
             relative: info.relative_residuals(),
+            solve_starts: info.solve_starts.to_vec(),
             outcome: CONVERGED.to_string(),
         });
         let forces = info
@@ -219,9 +232,10 @@ impl RunRecord {
         for log in &self.newton {
             let outcome = csv_field(&log.outcome);
             for (k, r) in log.relative.iter().enumerate() {
+                let (solve, iteration) = log.solve_of(k);
                 let _ = writeln!(
                     csv,
-                    "{},{},{},{k},{r:e},{outcome}",
+                    "{},{},{},{solve},{iteration},{r:e},{outcome}",
                     log.step + 1,
                     log.increment,
                     log.load_factor
@@ -578,26 +592,32 @@ pub fn read_newton(dir: &Path) -> Result<Vec<NewtonLog>> {
             newton_row(line)
         }
         .ok_or_else(bad)?;
-        let (step, increment, load_factor, iteration, r, outcome) = row;
-        // Iterations count 0, 1, … within an attempt: a row out of sequence is not ours.
+        let (step, increment, load_factor, solve, iteration, r, outcome) = row;
+        // Iterations count 0, 1, … within a solve, solves 1, 2, … within an attempt: a row out of
+        // sequence is not ours.
+        let new_attempt = solve == 1 && iteration == 0;
         match logs.last_mut() {
             Some(l)
-                if iteration > 0
+                if !new_attempt
                     && l.step + 1 == step
                     && l.increment == increment
                     && l.outcome == outcome =>
             {
-                if iteration != l.relative.len() {
+                let (last_solve, last_iteration) = l.solve_of(l.relative.len() - 1);
+                if iteration == 0 && solve == last_solve + 1 {
+                    l.solve_starts.push(l.relative.len());
+                } else if solve != last_solve || iteration != last_iteration + 1 {
                     return Err(bad());
                 }
                 l.relative.push(r);
             }
-            _ if iteration != 0 => return Err(bad()),
+            _ if !new_attempt => return Err(bad()),
             _ => logs.push(NewtonLog {
                 step: step.checked_sub(1).ok_or_else(bad)?,
                 increment,
                 load_factor,
                 relative: vec![r],
+                solve_starts: vec![0],
                 outcome,
             }),
         }
@@ -605,20 +625,23 @@ pub fn read_newton(dir: &Path) -> Result<Vec<NewtonLog>> {
     Ok(logs)
 }
 
-/// A row of `newton.csv`: step and increment (1-based), load factor, iteration, relative
-/// residual and outcome (the last field, in double quotes when it holds a comma or a quote).
-type NewtonRow = (usize, usize, f64, usize, f64, String);
+/// A row of `newton.csv`: step and increment (1-based), load factor, solve (from 1),
+/// iteration, relative residual and outcome (the last field, in double quotes when it holds a
+/// comma or a quote).
+type NewtonRow = (usize, usize, f64, usize, usize, f64, String);
 
 /// A row of the present form, `None` when malformed.
 fn newton_row(line: &str) -> Option<NewtonRow> {
-    let mut cols = line.splitn(6, ',');
+    let mut cols = line.splitn(7, ',');
     let mut next = || cols.next();
-    let (step, inc, t, iteration, r) = (next()?, next()?, next()?, next()?, next()?);
+    let (step, inc, t, solve, iteration, r) =
+        (next()?, next()?, next()?, next()?, next()?, next()?);
     let outcome = unquote(next()?)?;
     Some((
         step.parse().ok()?,
         inc.parse().ok().filter(|&i| i > 0)?,
         t.parse().ok()?,
+        solve.parse().ok().filter(|&s| s > 0)?,
         iteration.parse().ok()?,
         r.parse().ok()?,
         outcome,
@@ -636,6 +659,7 @@ fn newton_row_v1(line: &str) -> Option<NewtonRow> {
         step.parse().ok()?,
         inc.parse().ok().filter(|&i| i > 0)?,
         f64::NAN,
+        1,
         iteration.parse().ok()?,
         r.parse().ok()?,
         CONVERGED.to_string(),
@@ -818,6 +842,7 @@ mod tests {
             reason: reason.to_string(),
             retry,
             relative: vec![1.0, 2.0],
+            solve_starts: vec![0],
             notes: Vec::new(),
         };
         let attempts = [
@@ -842,8 +867,10 @@ mod tests {
     }
 
     /// `newton.csv` round trips: a converged increment after two failed attempts (an outcome
-    /// with a comma and quotes, so quoted), another step; the older form (converged increments
-    /// only, no load factor) is still read; a malformed row or a stray quote is named by line.
+    /// with a comma and quotes, so quoted), another step of three solves (the augmented
+    /// Lagrangian's), its iterations counted within each; the older form (converged increments
+    /// only, no load factor) is still read; a malformed row, a row out of sequence or a stray
+    /// quote is named by line.
     #[test]
     fn newton_table_round_trips() {
         let dir = std::env::temp_dir().join(format!("tricontact-report-{}", std::process::id()));
@@ -853,14 +880,23 @@ mod tests {
             increment,
             load_factor,
             relative: relative.to_vec(),
+            solve_starts: vec![0],
             outcome: outcome.to_string(),
         };
+        let mut uzawa = log(
+            1,
+            1,
+            1.0,
+            &[1.0, 2e-12, 1.0, 3e-3, 4e-11, 0.5, 1e-13],
+            CONVERGED,
+        );
+        uzawa.solve_starts = vec![0, 2, 5];
         let rec = RunRecord {
             newton: vec![
                 log(0, 1, 0.5, &[1.0, 3.0, 7.5], "cut back: element 9 inverted"),
                 log(0, 1, 0.25, &[1.0, 2.0], "failed: a, \"b\"; retried"),
                 log(0, 1, 0.25, &[1.0, 1e-3, 1e-9], CONVERGED),
-                log(1, 1, 1.0, &[1.0, 2e-12], CONVERGED),
+                uzawa,
             ],
             ..RunRecord::default()
         };
@@ -868,6 +904,10 @@ mod tests {
         let text = std::fs::read_to_string(dir.join("newton.csv")).expect("read");
         assert!(
             text.contains(",\"failed: a, \"\"b\"\"; retried\"\n"),
+            "{text}"
+        );
+        assert!(
+            text.ends_with("\n2,1,1,3,0,5e-1,converged\n2,1,1,3,1,1e-13,converged\n"),
             "{text}"
         );
         assert_eq!(read_newton(&dir).expect("read"), rec.newton);
@@ -907,13 +947,19 @@ mod tests {
         for (rows, line) in [
             ("step,increment,iteration,relative_residual\n1,x,0,1\n", 2),
             (
-                &format!("{NEWTON_HEADER}\n1,1,0.5,0,1,converged\n1,1,0.5,1,2,a\"b\n"),
+                &format!("{NEWTON_HEADER}\n1,1,0.5,1,0,1,converged\n1,1,0.5,1,1,2,a\"b\n"),
                 3,
             ),
             (
-                &format!("{NEWTON_HEADER}\n1,1,0.5,0,1,converged\n1,1,0.5,2,2,converged\n"),
+                &format!("{NEWTON_HEADER}\n1,1,0.5,1,0,1,converged\n1,1,0.5,1,2,2,converged\n"),
                 3,
             ),
+            (
+                // A second solve starts at its iteration 0, not 1.
+                &format!("{NEWTON_HEADER}\n1,1,0.5,1,0,1,converged\n1,1,0.5,2,1,2,converged\n"),
+                3,
+            ),
+            (&format!("{NEWTON_HEADER}\n1,1,0.5,0,0,1,converged\n"), 2),
         ] {
             std::fs::write(dir.join("newton.csv"), rows).expect("write");
             let e = read_newton(&dir).expect_err("malformed").to_string();

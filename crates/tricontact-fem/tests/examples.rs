@@ -38,11 +38,30 @@ fn patch_matching_meshes() {
     ] {
         let (lo, hi, f) = patch(model, "matching-hex.msh");
         println!("{model}: pressure {lo} … {hi}, force {f}");
+        if model == "augmented.toml" {
+            augmented_solves_are_told_apart();
+        }
         assert!((f - 1.0).abs() < 1e-9, "{model}: force {f}");
         assert!(
             (lo - 1.0).abs() < tol && (hi - 1.0).abs() < tol,
             "{model}: {lo} … {hi}"
         );
+    }
+}
+
+/// The augmented Lagrangian's increment is several Newton solves, one per Uzawa update; its
+/// record tells where each starts: the last iteration of each solve converged (relative
+/// residual below 10⁻⁸) and the next starts above it.
+fn augmented_solves_are_told_apart() {
+    let (_, record) = run_example("patch", "augmented.toml", Some("matching-hex.msh"));
+    let log = record.newton.last().expect("an increment");
+    let starts = &log.solve_starts;
+    assert!(starts.len() > 2 && starts[0] == 0, "{starts:?}");
+    for w in starts.windows(2) {
+        assert!(w[1] > w[0] + 1, "{starts:?}");
+        let (end, next) = (log.relative[w[1] - 1], log.relative[w[1]]);
+        assert!(end < 1e-8 && next > 10.0 * end, "{:?}", log.relative);
+        assert_eq!(log.solve_of(w[1]).1, 0);
     }
 }
 

@@ -135,6 +135,7 @@ fn the_attempts_a_run_stopped_on_follow_its_increments() {
         reason: format!("no convergence at {target}"),
         retry,
         relative: vec![1.0, 0.5, 0.4],
+        solve_starts: vec![0],
         notes: Vec::new(),
     };
     let stop = FemError::NotConverged {
@@ -276,16 +277,17 @@ fn names_with_commas_quotes_and_line_breaks_are_quoted() {
     assert!(rows[1..].iter().all(|r| r[1] == "bend, phase 1"));
     assert!(text.contains("\n1,\"bend, phase 1\",1,"), "{text}");
     let newton = std::fs::read_to_string(dir.join("newton.csv")).expect("newton");
-    assert!(parse_csv(&newton).iter().all(|r| r.len() == 6));
+    assert!(parse_csv(&newton).iter().all(|r| r.len() == 7));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A result folder whose `newton.csv` holds `residuals` for increment 1 of step 1.
 fn newton_folder(tag: &str, residuals: &[&str]) -> PathBuf {
     let dir = fresh_dir(tag);
-    let mut csv = String::from("step,increment,load_factor,iteration,relative_residual,outcome\n");
+    let mut csv =
+        String::from("step,increment,load_factor,solve,iteration,relative_residual,outcome\n");
     for (k, r) in residuals.iter().enumerate() {
-        csv.push_str(&format!("1,1,1,{k},{r},converged\n"));
+        csv.push_str(&format!("1,1,1,1,{k},{r},converged\n"));
     }
     std::fs::write(dir.join("newton.csv"), csv).expect("write");
     dir
@@ -341,9 +343,9 @@ fn nothing_to_plot_is_an_error() {
 #[test]
 fn newton_rows_out_of_sequence_are_malformed() {
     for (tag, bad) in [
-        ("x", "1,1,1,x,1e-3,converged"),
-        ("gap", "1,1,1,2,1e-3,converged"),
-        ("start", "1,2,1,1,1e-3,converged"),
+        ("x", "1,1,1,1,x,1e-3,converged"),
+        ("gap", "1,1,1,1,2,1e-3,converged"),
+        ("start", "1,2,1,1,1,1e-3,converged"),
     ] {
         let dir = newton_folder(&format!("plot-seq-{tag}"), &["1"]);
         let file = dir.join("newton.csv");
@@ -379,11 +381,15 @@ fn newton_csv_header_blank_lines_and_last_increment() {
         plot(good.lines().skip(1).collect::<Vec<_>>().join("\n").as_str()).expect_err("no header");
     assert!(e.contains(":1: expected the header"), "{e}");
     plot(&format!("{good}\n\n")).expect("trailing blank lines");
-    let e = plot(&format!("{good}2,0,1,0,1,converged\n")).expect_err("increment 0");
-    assert!(e.contains(":4: malformed row '2,0,1,0,1,converged'"), "{e}");
+    let e = plot(&format!("{good}2,0,1,1,0,1,converged\n")).expect_err("increment 0");
+    assert!(
+        e.contains(":4: malformed row '2,0,1,1,0,1,converged'"),
+        "{e}"
+    );
     // Step 2 written before step 1 (which has nothing to plot): the default is step 2.
-    let rows = "step,increment,load_factor,iteration,relative_residual,outcome\n\
-                2,1,1,0,1,converged\n2,1,1,1,1e-6,converged\n1,1,1,0,0,converged\n1,1,1,1,0,converged\n";
+    let rows = "step,increment,load_factor,solve,iteration,relative_residual,outcome\n\
+                2,1,1,1,0,1,converged\n2,1,1,1,1,1e-6,converged\n\
+                1,1,1,1,0,0,converged\n1,1,1,1,1,0,converged\n";
     plot(rows).expect("step 2 has something to plot");
     let _ = std::fs::remove_dir_all(&dir);
 }
