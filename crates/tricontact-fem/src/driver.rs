@@ -497,7 +497,7 @@ fn run_step(
                 extra.commit();
                 let du = c.u.iter().zip(u).map(|(a, b)| a - b).collect();
                 last = Some((du, t_new - t));
-                reference_integral += c.reference * (t_new - t);
+                reference_integral += c.trace.reference * (t_new - t);
                 t = t_new;
                 increment += 1;
                 let at = Reached {
@@ -527,9 +527,9 @@ fn run_step(
                     target: t_new,
                     reason: failed.failure.to_string(),
                     retry: Retry::LineSearch,
-                    relative: failed.relative(),
-                    solve_starts: failed.solve_starts,
-                    notes: failed.notes,
+                    relative: failed.trace.relative(),
+                    solve_starts: failed.trace.solve_starts,
+                    notes: failed.trace.notes,
                 });
             }
             Err(failed) => {
@@ -593,15 +593,15 @@ fn commit(
         time: at.s as f64 + at.t,
         iterations: c.iterations,
         line_searches: c.line_searches,
-        residuals: &c.residuals,
-        solve_starts: &c.solve_starts,
-        reference: c.reference,
+        residuals: &c.trace.residuals,
+        solve_starts: &c.trace.solve_starts,
+        reference: c.trace.reference,
         cutbacks: at.cutbacks,
         u: &summary.u,
         reactions: &carried.reactions,
         nlgeom: step.nlgeom,
         method: c.method,
-        notes: &c.notes,
+        notes: &c.trace.notes,
         point_fields: &point_fields,
         history: &history,
         attempts,
@@ -623,8 +623,9 @@ fn cut_back(
     attempts: &mut Vec<Attempt>,
 ) -> Result<()> {
     let step = problem.step;
-    let relative = failed.relative();
-    let (failure, notes, solve_starts) = (failed.failure, failed.notes, failed.solve_starts);
+    let relative = failed.trace.relative();
+    let Failed { failure, trace } = failed;
+    let (notes, solve_starts) = (trace.notes, trace.solve_starts);
     let hint = failure_hint(&failure, extra, problem.dm);
     extra.restore();
     if let (Failure::Singular(m), false) = (&failure, step.nlgeom) {
@@ -733,10 +734,7 @@ fn solve_with_outer(
     // A failure of the extra terms themselves, after the solves `c` (none before the first).
     let failed = |failure: String, c: Option<&Converged>| Failed {
         failure: Failure::Diverged(failure),
-        residuals: c.map_or_else(Vec::new, |c| c.residuals.clone()),
-        solve_starts: c.map_or_else(|| vec![0], |c| c.solve_starts.clone()),
-        reference: c.map_or(0.0, |c| c.reference),
-        notes: c.map_or_else(Vec::new, |c| c.notes.clone()),
+        trace: c.map(|c| c.trace.clone()).unwrap_or_default(),
     };
     extra.begin_increment(u0).map_err(|e| failed(e, None))?;
     let mut c = solve_increment(problem, extra, u0, start, solver)?;
@@ -758,35 +756,20 @@ fn solve_with_outer(
         // The solves of the increment follow each other in its record, failed or not.
         let next = match solve_increment(problem, extra, u0, &c.u, solver) {
             Ok(next) => next,
-            Err(mut f) => {
-                let mut starts = std::mem::take(&mut c.solve_starts);
-                starts.push(c.residuals.len());
-                f.solve_starts = starts;
-                let mut residuals = std::mem::take(&mut c.residuals);
-                residuals.append(&mut f.residuals);
-                f.residuals = residuals;
-                let mut notes = std::mem::take(&mut c.notes);
-                notes.append(&mut f.notes);
-                f.notes = notes;
-                f.reference = f.reference.max(c.reference);
-                return Err(f);
+            Err(f) => {
+                c.trace.append(f.trace);
+                return Err(Failed {
+                    failure: f.failure,
+                    trace: c.trace,
+                });
             }
         };
-        let mut solve_starts = std::mem::take(&mut c.solve_starts);
-        solve_starts.push(c.residuals.len());
-        let mut residuals = std::mem::take(&mut c.residuals);
-        residuals.extend_from_slice(&next.residuals);
-        let mut notes = std::mem::take(&mut c.notes);
-        notes.extend(next.notes.iter().cloned());
-        let iterations = c.iterations + next.iterations;
-        let line_searches = c.line_searches + next.line_searches;
+        let mut trace = c.trace;
+        trace.append(next.trace);
         c = Converged {
-            residuals,
-            solve_starts,
-            notes,
-            iterations,
-            line_searches,
-            reference: c.reference.max(next.reference),
+            trace,
+            iterations: c.iterations + next.iterations,
+            line_searches: c.line_searches + next.line_searches,
             ..next
         };
     }

@@ -56,46 +56,70 @@ pub struct Converged {
     pub u: Vec<f64>,
     /// `r = f_int − f_ext (+ extra)` over all global DOFs at `u`.
     pub residual: Vec<f64>,
-    /// Residual norms over free equations: predictor, then each iteration.
-    pub residuals: Vec<f64>,
-    /// Where each Newton solve's residuals start in `residuals` (`[0]` for one solve; the
-    /// augmented Lagrangian's successive solves follow each other).
-    pub solve_starts: Vec<usize>,
-    /// Reference norm used for the relative test.
-    pub reference: f64,
+    /// What its iterations went through.
+    pub trace: Trace,
     /// Linear solves performed.
     pub iterations: usize,
     /// Last factorization method.
     pub method: &'static str,
     /// Line-search trials (assemblies beyond one per iteration).
     pub line_searches: usize,
-    /// Notes of the extra terms per assembly (see
-    /// [`ExtraTerms::iteration_note`]), empty if it has none.
-    pub notes: Vec<String>,
 }
 
-/// A solve that failed: why, and the weighted residual norms it went through (the predictor's,
-/// then each iteration's) with the reference of its relative test, for the record of the attempt.
+/// A solve that failed: why, and what its iterations went through, for the record of the
+/// attempt.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Failed {
     /// Why.
     pub failure: Failure,
-    /// Residual norms over free equations: predictor, then each iteration (empty when the solve
-    /// failed before its first residual).
+    /// Its iterations (no residual when it failed at its first assembly).
+    pub trace: Trace,
+}
+
+/// What the iterations of an increment's Newton solves went through, converged or not.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Trace {
+    /// Weighted residual norms over free equations: each solve's predictor, then each of its
+    /// iterations.
     pub residuals: Vec<f64>,
-    /// Where each Newton solve's residuals start, as [`Converged::solve_starts`].
+    /// Where each solve starts in `residuals` (`[0]` for one solve; the augmented Lagrangian's
+    /// successive solves follow each other).
     pub solve_starts: Vec<usize>,
-    /// Reference norm of the relative test when it failed.
+    /// Reference norm of the relative test (the largest of the solves').
     pub reference: f64,
-    /// Notes of the extra terms per assembly, as [`Converged::notes`].
+    /// Notes of the extra terms per assembly (see [`ExtraTerms::iteration_note`]), empty if it
+    /// has none.
     pub notes: Vec<String>,
 }
 
-impl Failed {
+impl Default for Trace {
+    /// One solve, nothing recorded yet.
+    fn default() -> Self {
+        Self {
+            residuals: Vec::new(),
+            solve_starts: vec![0],
+            reference: 0.0,
+            notes: Vec::new(),
+        }
+    }
+}
+
+impl Trace {
     /// The residual norms relative to the reference ([`relative_residuals`]).
     #[must_use]
     pub fn relative(&self) -> Vec<f64> {
         relative_residuals(&self.residuals, self.reference)
+    }
+
+    /// Appends the record of the solves that followed these (`later`): its residuals and notes
+    /// after these, its solves numbered on, the larger reference.
+    pub fn append(&mut self, later: Trace) {
+        let offset = self.residuals.len();
+        self.solve_starts
+            .extend(later.solve_starts.iter().map(|s| s + offset));
+        self.residuals.extend(later.residuals);
+        self.notes.extend(later.notes);
+        self.reference = self.reference.max(later.reference);
     }
 }
 
@@ -257,10 +281,7 @@ pub fn solve_increment(
         Ok(r) => Ok(it.converged(r)),
         Err(failure) => Err(Failed {
             failure,
-            residuals: it.residuals,
-            solve_starts: vec![0],
-            reference: it.reference,
-            notes: it.notes,
+            trace: it.take_trace(),
         }),
     }
 }
@@ -500,18 +521,25 @@ impl Iterate {
         self.iterations += 1;
     }
 
-    /// The converged increment, with `residual` the full residual at `u`.
-    fn converged(self, residual: Vec<f64>) -> Converged {
-        Converged {
-            u: self.u,
-            residual,
-            residuals: self.residuals,
+    /// The record of the iterations so far (taken out of `self`).
+    fn take_trace(&mut self) -> Trace {
+        Trace {
+            residuals: std::mem::take(&mut self.residuals),
             solve_starts: vec![0],
             reference: self.reference,
+            notes: std::mem::take(&mut self.notes),
+        }
+    }
+
+    /// The converged increment, with `residual` the full residual at `u`.
+    fn converged(mut self, residual: Vec<f64>) -> Converged {
+        Converged {
+            trace: self.take_trace(),
+            u: self.u,
+            residual,
             iterations: self.iterations,
             method: self.method,
             line_searches: self.line_searches,
-            notes: self.notes,
         }
     }
 }
@@ -665,4 +693,36 @@ fn not_converged(
         "no convergence in {iterations} iteration{} ({unmet}){hint}",
         if iterations == 1 { "" } else { "s" }
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The solves of an increment recorded one after another: residuals and notes in order, each
+    /// solve's start shifted by what came before, the larger reference; a record of two solves
+    /// appended keeps both starts.
+    #[test]
+    fn traces_append_solve_after_solve() {
+        let trace = |residuals: &[f64], starts: &[usize], reference, note: &str| Trace {
+            residuals: residuals.to_vec(),
+            solve_starts: starts.to_vec(),
+            reference,
+            notes: vec![note.to_string()],
+        };
+        let mut t = trace(&[4.0, 1e-9], &[0], 4.0, "a");
+        t.append(trace(&[2.0, 3.0, 1e-10], &[0], 8.0, "b"));
+        t.append(trace(&[1.0, 1e-11, 0.5, 1e-12], &[0, 2], 2.0, "c"));
+        assert_eq!(
+            t.residuals,
+            [4.0, 1e-9, 2.0, 3.0, 1e-10, 1.0, 1e-11, 0.5, 1e-12]
+        );
+        assert_eq!(t.solve_starts, [0, 2, 5, 7]);
+        assert_eq!(t.reference, 8.0);
+        assert_eq!(t.notes, ["a", "b", "c"]);
+        assert_eq!(t.relative()[0], 0.5);
+        // A failure before any residual still counts as a solve that starts at the end.
+        t.append(Trace::default());
+        assert_eq!(t.solve_starts, [0, 2, 5, 7, 9]);
+    }
 }
