@@ -1,6 +1,7 @@
 //! The assembled global tangent (solids + contact) against central finite differences of the
 //! assembled residual, for the three methods, on two overlapping blocks shifted so that slave nodes
-//! sit inside facets (away from edges, where `∇²P` jumps).
+//! sit inside facets (away from edges, where `∇²P` jumps); and for the penalty and the augmented
+//! Lagrangian with nodes in a concave valley, on two flanks.
 #![allow(clippy::needless_range_loop)]
 
 mod common;
@@ -41,6 +42,29 @@ fn check(method: &str) -> f64 {
     let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Hex8);
     let u = box_mesh([0.6, 0.6, 0.5], [2, 2, 1], ElementKind::Hex8);
     let mesh = tricontact_fem::structured::stack(&l, &u, [0.13, 0.21, 0.5]);
+    tangent_error(mesh, method, 0.75, false)
+}
+
+/// The largest difference between the assembled tangent and central differences of the
+/// residual, relative to the tangent's largest entry, for `mesh` (two blocks, `lower_*` and
+/// `upper_*`) with the upper block's nodes above `z_upper` pressed 0.01 down and its bottom
+/// nodes (those of the lowest `z`) another 0.01; `two_flanks`: some node must be on two flanks.
+fn tangent_error(
+    mesh: tricontact_fem::mesh::Mesh,
+    method: &str,
+    z_upper: f64,
+    two_flanks: bool,
+) -> f64 {
+    let lower_nodes = mesh.group("lower_solid").map_or(0, |g| {
+        g.elements
+            .iter()
+            .flat_map(|&e| mesh.elements[e].nodes.iter().copied())
+            .max()
+            .map_or(0, |a| a + 1)
+    });
+    let bottom = mesh.nodes[lower_nodes..]
+        .iter()
+        .fold(f64::INFINITY, |m, p| m.min(p[2]));
     let an = common::analysis(mesh, &model(method));
     let mut terms = ContactTerms::new(&an);
     let n_extra = terms.num_extra();
@@ -58,7 +82,7 @@ fn check(method: &str) -> f64 {
     };
     for d in 0..n {
         u[d] = 2e-3 * rnd();
-        if d % 3 == 2 && an.mesh.nodes[d / 3][2] > 0.75 {
+        if d % 3 == 2 && an.mesh.nodes[d / 3][2] > z_upper {
             u[d] -= 0.01; // press the upper block in
         }
     }
@@ -68,7 +92,7 @@ fn check(method: &str) -> f64 {
     terms.begin_increment(&u).expect("begin");
     // Penetrating slave nodes: upper-block nodes at z = 0.5 moved down.
     for d in 0..n {
-        if d % 3 == 2 && (an.mesh.nodes[d / 3][2] - 0.5).abs() < 1e-12 && d / 3 >= l.nodes.len() {
+        if d % 3 == 2 && (an.mesh.nodes[d / 3][2] - bottom).abs() < 1e-12 && d / 3 >= lower_nodes {
             u[d] -= 0.01;
         }
     }
@@ -84,6 +108,7 @@ fn check(method: &str) -> f64 {
     };
     let closed = terms.iteration_note().unwrap_or_default();
     assert!(!closed.contains(" 0 closed"), "{closed}");
+    assert_eq!(closed.contains("on two flanks"), two_flanks, "{closed}");
     let k = asm.matrix(&pat);
     let kmax = k.as_ref().val().iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let h = 1e-7;
@@ -136,4 +161,28 @@ fn global_tangent_matches_finite_differences_augmented() {
 #[test]
 fn global_tangent_matches_finite_differences_multiplier() {
     assert!(check("multiplier") < 1e-6);
+}
+
+/// A block one brick wide across a V-groove (`common::v_groove`'s floor, the base one brick per
+/// flank along `x`), its bottom 0.03 below the valley line, then pressed 0.02 more: its middle
+/// row of bottom nodes, 0.03 past the valley line, is behind both flanks, its foot on the far flank's plane within the
+/// reach of the second constraint; the tangent includes both constraints' terms.
+fn valley(method: &str) -> f64 {
+    let mut lower = box_mesh([2.0, 1.0, 1.0], [4, 2, 1], ElementKind::Hex8);
+    for p in &mut lower.nodes {
+        p[2] *= common::groove_top(p[0]);
+    }
+    let upper = box_mesh([0.4, 0.6, 0.3], [2, 2, 1], ElementKind::Hex8);
+    let mesh = tricontact_fem::structured::stack(&lower, &upper, [0.83, 0.13, 0.73]);
+    tangent_error(mesh, method, 0.9, true)
+}
+
+#[test]
+fn global_tangent_matches_finite_differences_on_two_flanks_penalty() {
+    assert!(valley("penalty") < 1e-6);
+}
+
+#[test]
+fn global_tangent_matches_finite_differences_on_two_flanks_augmented() {
+    assert!(valley("augmented") < 1e-6);
 }

@@ -9,7 +9,9 @@
 //!   triangulated base stays constant while the slave nodes cross facets;
 //! * contact-block (examples/contact-block): a block pressed onto a base and dragged sideways
 //!   with multipliers; no slave node is left inside the base, whichever way Newton starts an
-//!   increment.
+//!   increment;
+//! * v-groove (examples/v-groove): a wedge pressed into a V-groove, a row of its bottom nodes on
+//!   the valley line; the penalty and the augmented Lagrangian hold them on both flanks.
 
 mod common;
 
@@ -503,4 +505,35 @@ fn the_penalty_study_models_resolve() {
         }
         assert!(an.open_gap_support().is_empty(), "{model}");
     }
+}
+
+/// The V-groove example, as README and `examples/README.md` give it: every method finishes the
+/// press in its four increments; the penalty and the augmented Lagrangian hold the valley nodes
+/// on both flanks (nothing deeper behind either than the penalty's gap, or than 10⁻⁵ with the
+/// augmented Lagrangian), with normal forces within 1 % of each other;
+/// multipliers, one constraint per node, leave them behind the other flank, and say so.
+#[test]
+fn the_v_groove_example_holds_the_valley_nodes_on_both_flanks() {
+    const PAIR: &str = "wedge_bottom-base_top";
+    let mut forces = Vec::new();
+    for model in ["penalty.toml", "augmented.toml", "multiplier.toml"] {
+        let (summary, record) = run_example("v-groove", model, None);
+        let depth = last_column(&record, &format!("{PAIR}_max_penetration"));
+        let force = last_column(&record, &format!("{PAIR}_normal_force"));
+        println!(
+            "v-groove {model}: {} increments, {} iterations, {} cutbacks, normal force {force:.6e}, largest penetration {depth:.3e}",
+            summary.increments, summary.iterations, summary.cutbacks
+        );
+        assert_eq!((summary.increments, summary.cutbacks), (4, 0), "{model}");
+        match model {
+            "multiplier.toml" => assert!(depth > 1e-3, "{model}: {depth}"),
+            "penalty.toml" => assert!(depth < 1e-3, "{model}: {depth}"),
+            _ => assert!(depth < 1e-5, "{model}: {depth}"),
+        }
+        forces.push(force);
+    }
+    assert!(
+        (forces[0] - forces[1]).abs() < 0.01 * forces[1],
+        "{forces:?}"
+    );
 }

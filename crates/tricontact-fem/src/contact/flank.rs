@@ -1,26 +1,130 @@
-//! Penetration of the flank across a concave edge: what one constraint per node leaves unheld.
+//! Concave edges and corners of the master: the flank across the kink, which one constraint per
+//! node leaves unheld.
 //!
 //! A slave node is constrained against one facet `F` (its plane `P_F`). Where `F` meets a
 //! neighbouring facet `G` at a concave edge or corner (a valley, the floor and wall of a corner),
 //! the master body is the union of the two half-spaces behind `F` and `G`, and a node held on
 //! `F`'s plane may still lie behind `G`, with `P_G < 0`, its foot in `G` or near it (within
 //! [`LOST_TOLERANCE`], as for a node that left its facet: in a corner a node can be behind both
-//! flanks and project into neither). This module measures that depth, `−P_G`, for the reports
-//! (`_max_penetration`, the run's summary); it enforces nothing (a second constraint per node at
-//! concave kinks was measured and not kept: see `contact/mod.rs`).
+//! flanks and project into neither). Near the kink, keeping the node out of that union takes both
+//! constraints, `P_F ≥ 0` and `P_G ≥ 0`.
 //!
-//! The candidates `G` are the facets near the node (the two flanks need not share nodes: a wall
-//! meshed apart from its floor), within twice `F`'s longest edge plus the node's gap. `F` and
-//! `G` are taken as concave when the corners of each that the other does not share all lie in
-//! front of the other's plane, at least one by more than `10⁻⁹` of `F`'s longest edge (so every
-//! point of each is in front of the other): on a flat, convex or saddle-shaped surface `G` is
-//! never counted, so a node inside the body near a ridge, which projects into both flanks,
-//! reports only its constrained gap, and a node outside below a thin plate is not taken as
-//! behind the plate's far side.
+//! The candidates `G` are the facets near the node, within twice `F`'s longest edge plus the
+//! node's gap (the two flanks need not share nodes: a wall meshed apart from its floor), concave
+//! to `F` (below), whose projection region the node is near (within [`LOST_TOLERANCE`]).
+//! * [`second_flank`] gives the facet of the second constraint, which the penalty and the
+//!   augmented Lagrangian enforce beside the first (see `contact/mod.rs`): among the candidates
+//!   with a kink (the angle between the normals) of at least [`ENFORCED_KINK_DEGREES`], the one
+//!   with the smallest `P_G`. Below that kink, where a smooth curved master's facets meet, the
+//!   one constraint serves, as before.
+//! * [`flank_penetration`] measures, for the reports (`_max_penetration`, the run's summary), the
+//!   deepest `−P_G` over the candidates the node is behind, whatever the kink, enforced or not.
+//!
+//! `F` and `G` are taken as concave when the corners of each that the other does not share all
+//! lie in front of the other's plane, at least one by more than `10⁻⁹` of `F`'s longest edge
+//! (round-off), none behind it by more than `10⁻³` of it (so every point of each is in front of
+//! the other, but for that margin: the corner nodes of a wall meshed apart from its floor, which
+//! start on the floor's plane, move off it as the parts deform; with `10⁻⁹` there too a node in
+//! such a corner lost and regained its second constraint from one iteration to the next, and
+//! Newton cycled): on a flat, convex or saddle-shaped surface `G` is never counted, so a node inside the body near a ridge, which projects into both flanks,
+//! has only its own constraint, and a node outside below a thin plate is not taken as behind the
+//! plate's far side.
 
 use super::LOST_TOLERANCE;
 use tricontact::search::{Bvh, Query, Surface};
 use tricontact::{NodeFacet, Vec3};
+
+/// The smallest kink, the angle between the normals of two concave facets, at which
+/// [`second_flank`] enforces the second one. At 15° the V-groove of `examples/v-groove` (a kink
+/// of 53°) converges with a penalty and the augmented Lagrangian, and every other example's
+/// solution is unchanged; an earlier trial that took every concave neighbour (0°, or 5°) made runs
+/// that converge fail, the nearly flat kinks of a finely meshed curved surface counting (the
+/// README's "Concave edges and corners").
+pub const ENFORCED_KINK_DEGREES: f64 = 15.0;
+
+/// `own`'s pair (its facet at the node) and its nodes, with those of `other`: every corner of
+/// `other` not shared with `own` lies in front of `own`'s plane or behind it by at most `behind`,
+/// and one lies in front by more than `ahead`: the whole of `other` is in front of `own`, but
+/// for `behind`.
+fn in_front(
+    x: &[Vec3],
+    (pair, own): (&NodeFacet, &[u32; 3]),
+    other: &[u32; 3],
+    (behind, ahead): (f64, f64),
+) -> bool {
+    let heights = other
+        .iter()
+        .filter(|a| !own.contains(a))
+        .map(|&a| (x[a as usize] - pair.facet.nodes()[0]).dot(&pair.facet.normal()));
+    let (low, high) = heights.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), z| {
+        (l.min(z), h.max(z))
+    });
+    low >= -behind && high > ahead
+}
+
+/// `true` when `F` and `G` (their pairs at the node and their nodes) are concave to each other:
+/// each lies wholly in front of the other's plane but for `10⁻³` of `F`'s longest edge, with a
+/// corner in front by more than `10⁻⁹` of it.
+fn concave(x: &[Vec3], f: (&NodeFacet, &[u32; 3]), g: (&NodeFacet, &[u32; 3])) -> bool {
+    let size = f.0.facet.size();
+    let margins = (1e-3 * size, 1e-9 * size);
+    in_front(x, f, g.1, margins) && in_front(x, g, f.1, margins)
+}
+
+/// The facets `G` concave to node `s`'s facet `facet` near it (within twice `facet`'s longest
+/// edge plus the node's gap, and within `radius`), with the node's pair on each and the cosine
+/// of the kink (`W_F·W_G`), at positions `x` (`bvh` built on them). Facets containing the node
+/// are left out (self-contact).
+fn concave_neighbours<'a>(
+    surface: &'a Surface,
+    bvh: &'a Bvh,
+    x: &'a [Vec3],
+    (s, facet): (usize, u32),
+    radius: f64,
+) -> impl Iterator<Item = (u32, NodeFacet, f64)> + 'a {
+    let pair_with = move |f: u32| {
+        let [a, b, c] = surface.corners(f, x);
+        NodeFacet::new(a, b, c, x[s]).ok()
+    };
+    let own = pair_with(facet).map(|pair| (pair, surface.facets()[facet as usize]));
+    let hits = own.as_ref().map_or_else(Vec::new, |(pair, _)| {
+        let reach = (2.0 * pair.facet.size() + pair.gap().abs()).min(radius);
+        let query = Query {
+            point: x[s],
+            exclude: u32::try_from(s).ok(),
+        };
+        bvh.within(surface, &query, reach)
+    });
+    hits.into_iter().filter_map(move |hit| {
+        let (f_pair, f_nodes) = own.as_ref()?;
+        let g = hit.facet;
+        let g_pair = pair_with(g).filter(|_| g != facet)?;
+        let g_nodes = surface.facets()[g as usize];
+        concave(x, (f_pair, f_nodes), (&g_pair, &g_nodes))
+            .then(|| (g, g_pair, f_pair.facet.normal().dot(&g_pair.facet.normal())))
+    })
+}
+
+/// The facet of node `s`'s second constraint, with its pair at `x`, where the node's own facet
+/// is `facet` (see the module documentation): among the facets concave to `facet` near the node
+/// (as [`flank_penetration`] takes them) with a kink of at least [`ENFORCED_KINK_DEGREES`], whose
+/// projection the node is within [`LOST_TOLERANCE`] of, the one with the smallest gap `P_G`
+/// (ties to the lowest index), open or not: the method decides whether it closes. `None` when
+/// there is none.
+#[must_use]
+pub fn second_flank(
+    surface: &Surface,
+    bvh: &Bvh,
+    x: &[Vec3],
+    (s, facet): (usize, u32),
+    radius: f64,
+) -> Option<(u32, NodeFacet)> {
+    let cos_kink = ENFORCED_KINK_DEGREES.to_radians().cos();
+    concave_neighbours(surface, bvh, x, (s, facet), radius)
+        .filter(|(_, pair, cos)| *cos <= cos_kink && pair.projection.is_inside(LOST_TOLERANCE))
+        .map(|(g, pair, _)| (g, pair))
+        .min_by(|(f, a), (g, b)| a.gap().total_cmp(&b.gap()).then(f.cmp(g)))
+}
 
 /// The largest `−P_G` over the facets `G` near node `s` (within twice `facet`'s size plus the
 /// node's gap, and within `radius`), concave to `facet`, that the node lies behind with its foot
@@ -34,49 +138,9 @@ pub fn flank_penetration(
     (s, facet): (usize, u32),
     radius: f64,
 ) -> f64 {
-    let nodes = |f: u32| surface.facets()[f as usize];
-    let pair_with = |f: u32| {
-        let [a, b, c] = surface.corners(f, x);
-        NodeFacet::new(a, b, c, x[s]).ok()
-    };
-    let Some(f_pair) = pair_with(facet) else {
-        return 0.0;
-    };
-    let f_nodes = nodes(facet);
-    let margin = 1e-9 * f_pair.facet.size();
-    // The corners of `other` not shared with `own` lie in front of `own`'s plane (within the
-    // margin), at least one beyond it: the whole of `other` is in front of `own`.
-    let rises = |pair: &NodeFacet, own: &[u32; 3], other: &[u32; 3]| {
-        let heights = other
-            .iter()
-            .filter(|a| !own.contains(a))
-            .map(|&a| (x[a as usize] - pair.facet.nodes()[0]).dot(&pair.facet.normal()));
-        let (low, high) = heights.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), z| {
-            (l.min(z), h.max(z))
-        });
-        low >= -margin && high > margin
-    };
-    let reach = (2.0 * f_pair.facet.size() + f_pair.gap().abs()).min(radius);
-    let query = Query {
-        point: x[s],
-        exclude: u32::try_from(s).ok(),
-    };
-    let mut deepest = 0.0f64;
-    for hit in bvh.within(surface, &query, reach) {
-        let g = hit.facet;
-        if g == facet {
-            continue;
-        }
-        let Some(g_pair) = pair_with(g) else {
-            continue;
-        };
-        let behind = g_pair.gap() < 0.0 && g_pair.projection.is_inside(LOST_TOLERANCE);
-        let g_nodes = nodes(g);
-        if behind && rises(&f_pair, &f_nodes, &g_nodes) && rises(&g_pair, &g_nodes, &f_nodes) {
-            deepest = deepest.max(-g_pair.gap());
-        }
-    }
-    deepest
+    concave_neighbours(surface, bvh, x, (s, facet), radius)
+        .filter(|(_, pair, _)| pair.gap() < 0.0 && pair.projection.is_inside(LOST_TOLERANCE))
+        .fold(0.0f64, |deepest, (_, pair, _)| deepest.max(-pair.gap()))
 }
 
 #[cfg(test)]
@@ -115,6 +179,42 @@ mod tests {
         // On its own side of the valley line a node on the flank is in front of the other.
         let (x, facets) = profile(1.0);
         assert_eq!(depth(x, facets, Vec3::new(-0.05, 0.5, 0.025), 0), 0.0);
+    }
+
+    /// The second flank of `node` on facet `f` of `facets`, at `x`.
+    fn second(mut x: Vec<Vec3>, facets: Vec<[u32; 3]>, node: Vec3, f: u32) -> Option<u32> {
+        x.push(node);
+        let s = x.len() - 1;
+        let surface = Surface::new(facets, x.len()).expect("surface");
+        let bvh = Bvh::build(&surface, &x, 1.0).expect("tree");
+        second_flank(&surface, &bvh, &x, (s, f), 1.0).map(|(g, pair)| {
+            let [a, b, c] = surface.corners(g, &x);
+            let direct = NodeFacet::new(a, b, c, node).expect("pair");
+            assert_eq!(pair.gap(), direct.gap());
+            g
+        })
+    }
+
+    #[test]
+    fn the_second_flank_is_the_deepest_concave_neighbour_beyond_the_kink() {
+        // Below the valley line (x = 0, z = 0) between the flanks z = |x|/2, on the left flank
+        // (facet 0): behind both, its foot on the right flank's plane 0.016 past the line, within
+        // 0.1 of facet 3 (facet 2, in the same plane, lies far from the foot).
+        let (x, facets) = profile(1.0);
+        let node = Vec3::new(-0.01, 0.5, -0.02);
+        assert_eq!(second(x.clone(), facets.clone(), node, 0), Some(3));
+        // High on the left flank, 0.01 below it: in front of the right flank's plane, its foot
+        // there 0.36 past the line: none.
+        assert_eq!(
+            second(x.clone(), facets.clone(), Vec3::new(-0.6, 0.5, 0.29), 0),
+            None
+        );
+        // A ridge, a flat surface and a kink of 5.7° (slopes ±0.05): none.
+        for sign in [-1.0, 0.0, 0.1] {
+            let (x, facets) = profile(sign);
+            let below = Vec3::new(-0.01, 0.5, -0.02);
+            assert_eq!(second(x, facets, below, 0), None, "profile {sign}");
+        }
     }
 
     #[test]

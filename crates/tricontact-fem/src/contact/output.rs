@@ -7,11 +7,13 @@
 //!   contact surface; at the corners of tri6 faces, where `∫N_a dA = 0`, the mean over the
 //!   mid-side nodes next to it (0 for other nodes without area);
 //! * `contact_gap`: the slave node's gap `P` (first pass; 0 without facet);
-//! * `contact_status`: 1 closed, 0 open (slave nodes);
+//! * `contact_status`: 1 closed (on its own constraint or on a second flank), 0 open (slave
+//!   nodes);
 //! * `contact_facet`: Gmsh tag of the master face a closed slave node is on (0 when open).
 //!
 //! History columns per pair `<slave>-<master>`: `_normal_force` (`Σ −λ` over all slave nodes and
-//! passes), `_active` (closed nodes, of both passes with `two_pass`), `_max_penetration` (`max(0, −P)` over every slave node with a facet, open
+//! passes, a second flank's `λ` included), `_active` (nodes closed on either constraint, of both
+//! passes with `two_pass`), `_max_penetration` (`max(0, −P)` over every slave node with a facet, open
 //! or closed, so that a node left open inside the master shows), `_area`
 //! (lumped area of the closed nodes; with `two_pass`, the mean of the two sides'), `_min_pressure` and `_max_pressure` (`contact_pressure` over
 //! the closed slave nodes that have an area; 0 when there are none).
@@ -52,11 +54,11 @@ impl ContactTerms {
                     if q == 0 {
                         gap[s] = st.gap;
                     }
-                    if st.active {
+                    if st.active || st.second.active {
                         status[s] = 1.0;
-                        if q == 0 {
-                            facet[s] = st.facet.map_or(0.0, |f| pass.face_tags[f as usize] as f64);
-                        }
+                    }
+                    if st.active && q == 0 {
+                        facet[s] = st.facet.map_or(0.0, |f| pass.face_tags[f as usize] as f64);
                     }
                 }
             }
@@ -88,11 +90,11 @@ impl ContactTerms {
             let (mut p_min, mut p_max) = (f64::INFINITY, 0.0f64);
             for (q, pass) in pair.passes.iter().enumerate() {
                 for (j, st) in self.committed[p][q].iter().enumerate() {
-                    force -= st.lambda;
+                    force -= st.lambda + st.second.lambda;
                     if st.facet.is_some() {
                         pen = pen.max(-st.gap).max(st.flank);
                     }
-                    if st.active {
+                    if st.active || st.second.active {
                         active += 1;
                         area += pass.areas[j];
                         if let Some(p) = self.pressure(pass.slaves[j]) {

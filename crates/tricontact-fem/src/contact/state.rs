@@ -14,9 +14,11 @@ pub struct NodeState {
     pub normal: [f64; 3],
     /// Gap `P` (0 without facet).
     pub gap: f64,
-    /// At the last convergence, the node's depth behind the master that its one constraint
-    /// does not hold: behind a facet across a concave edge of its facet ([`super::flank`]), or
-    /// with `small_sliding` behind the facet it is over now (0 for none).
+    /// At the last convergence, the node's depth behind the master beyond its own facet's
+    /// plane: behind a facet across a concave edge of its facet ([`super::flank`]; held by the
+    /// second constraint with a penalty or the augmented Lagrangian where the kink is large
+    /// enough, unheld otherwise), or with `small_sliding` behind the facet it is over now (0 for
+    /// none).
     pub flank: f64,
     /// Normal multiplier at the last evaluation (`λ`, `αP` or `λ̂`; ≤ 0 in compression, 0 open).
     pub lambda: f64,
@@ -36,4 +38,23 @@ pub struct NodeState {
     pub left_facet: Option<u32>,
     /// Small sliding: facet, shape functions and normal at the start of the increment.
     pub start: Option<(u32, [f64; 3], [f64; 3])>,
+    /// The second constraint, against the flank across a concave kink of the node's facet
+    /// (penalty and augmented Lagrangian, finite sliding).
+    pub second: SecondFlank,
+}
+
+/// The state of a node's second constraint ([`super::flank::second_flank`]) at the last
+/// evaluation: as the node's own, with a multiplier estimate of its own.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SecondFlank {
+    /// The flank's facet, `None` when the node has none.
+    pub facet: Option<u32>,
+    /// Its gap `P_G` (0 without facet).
+    pub gap: f64,
+    /// Its multiplier (`αP_G` or `λ̂`; ≤ 0 in compression, 0 open).
+    pub lambda: f64,
+    /// Augmented Lagrangian: its Uzawa estimate.
+    pub lambda_k: f64,
+    /// Closed at the last evaluation.
+    pub active: bool,
 }

@@ -184,3 +184,32 @@ pub fn last_column(record: &tricontact_fem::report::RunRecord, name: &str) -> f6
         .map(|(_, v)| *v)
         .unwrap_or_else(|| panic!("no history column {name}"))
 }
+
+/// Height of the V-groove's floor at `x` in [`v_groove`]: `1` outside `|x − 1| < 0.5`, down to
+/// `0.75` at the valley line `x = 1` (flanks at 26.6°, a concave kink of 53° between them).
+pub fn groove_top(x: f64) -> f64 {
+    1.0 - 0.25 * (1.0 - (x - 1.0).abs() / 0.5).max(0.0)
+}
+
+/// A 2 × 1 × 1 base of `base` bricks with a V-groove along `y` in its top (`lower_*` groups)
+/// and, as `upper_*`, a wedge of `wedge` bricks filling the groove between `x = 0.6` and `1.4`
+/// (`y` from 0.1 to 0.9, top at `z = 1.3`), its bottom lying on the flanks; `kind` for both.
+/// With an even number of bricks along `x` in the wedge, a row of its bottom nodes lies on the
+/// valley line.
+pub fn v_groove(
+    base: [usize; 3],
+    wedge: [usize; 3],
+    kind: tricontact_fem::mesh::ElementKind,
+) -> Mesh {
+    let mut lower = tricontact_fem::structured::box_mesh([2.0, 1.0, 1.0], base, kind);
+    for p in &mut lower.nodes {
+        p[2] *= groove_top(p[0]);
+    }
+    let mut upper = tricontact_fem::structured::box_mesh([0.8, 0.8, 1.0], wedge, kind);
+    for p in &mut upper.nodes {
+        let (x, y, s) = (0.6 + p[0], 0.1 + p[1], p[2]);
+        let bottom = groove_top(x);
+        *p = [x, y, bottom + (1.3 - bottom) * s];
+    }
+    tricontact_fem::structured::stack(&lower, &upper, [0.0, 0.0, 0.0])
+}
