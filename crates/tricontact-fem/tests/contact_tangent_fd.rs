@@ -164,9 +164,10 @@ fn global_tangent_matches_finite_differences_multiplier() {
 }
 
 /// A block one brick wide across a V-groove (`common::v_groove`'s floor, the base one brick per
-/// flank along `x`), its bottom 0.03 below the valley line, then pressed 0.02 more: its middle
-/// row of bottom nodes, 0.03 past the valley line, is behind both flanks, its foot on the far flank's plane within the
-/// reach of the second constraint; the tangent includes both constraints' terms.
+/// flank along `x`), its bottom 0.02 below the valley line, then pressed 0.02 more: its middle
+/// row of bottom nodes, 0.03 past the valley line, is behind both flanks, its foot on the far
+/// flank's plane within the reach of the second constraint; the tangent includes both
+/// constraints' terms.
 fn valley(method: &str) -> f64 {
     let mut lower = box_mesh([2.0, 1.0, 1.0], [4, 2, 1], ElementKind::Hex8);
     for p in &mut lower.nodes {

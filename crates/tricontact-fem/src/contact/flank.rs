@@ -15,8 +15,9 @@
 //! * [`second_flank`] gives the facet of the second constraint, which the penalty and the
 //!   augmented Lagrangian enforce beside the first (see `contact/mod.rs`): among the candidates
 //!   with a kink (the angle between the normals) of at least [`ENFORCED_KINK_DEGREES`], the one
-//!   with the smallest `P_G`. Below that kink, where a smooth curved master's facets meet, the
-//!   one constraint serves, as before.
+//!   with the smallest `P_G` (with a hysteresis among tied ones). Below that kink, where a smooth
+//!   curved master's facets meet, the one constraint serves, as before. One second constraint at
+//!   most.
 //! * [`flank_penetration`] measures, for the reports (`_max_penetration`, the run's summary), the
 //!   deepest `−P_G` over the candidates the node is behind, whatever the kink, enforced or not.
 //!
@@ -105,25 +106,59 @@ fn concave_neighbours<'a>(
     })
 }
 
+/// Where the node's previous second flank is, how near (as a gap) another must come to displace
+/// it: the previous flank, when it is still a candidate within `tolerance` of the smallest gap.
+#[derive(Clone, Copy, Debug)]
+pub struct Hysteresis {
+    /// The facet of the node's second constraint at the previous evaluation.
+    pub previous: Option<u32>,
+    /// A gap (a length): candidates within it of the smallest gap count as tied.
+    pub tolerance: f64,
+}
+
 /// The facet of node `s`'s second constraint, with its pair at `x`, where the node's own facet
 /// is `facet` (see the module documentation): among the facets concave to `facet` near the node
 /// (as [`flank_penetration`] takes them) with a kink of at least [`ENFORCED_KINK_DEGREES`], whose
-/// projection the node is within [`LOST_TOLERANCE`] of, the one with the smallest gap `P_G`
-/// (ties to the lowest index), open or not: the method decides whether it closes. `None` when
-/// there is none.
+/// projection the node is within [`LOST_TOLERANCE`] of, those with the smallest gap `P_G`
+/// within `hysteresis.tolerance`; of these the previous second flank if it is one, else the one
+/// the node projects deepest into (the largest smallest barycentric coordinate: coplanar facets
+/// of the far flank have the same gap, and round-off must not choose among them, since `∇²P`
+/// differs from facet to facet), ties to the lowest index. Open or not: the method decides
+/// whether it closes. `None` when there is none. One second constraint at most: in a corner of
+/// three concave planes (a floor and two walls) the third is not held, only measured.
 #[must_use]
 pub fn second_flank(
     surface: &Surface,
     bvh: &Bvh,
     x: &[Vec3],
     (s, facet): (usize, u32),
-    radius: f64,
+    (radius, hysteresis): (f64, Hysteresis),
 ) -> Option<(u32, NodeFacet)> {
     let cos_kink = ENFORCED_KINK_DEGREES.to_radians().cos();
-    concave_neighbours(surface, bvh, x, (s, facet), radius)
+    let candidates: Vec<(u32, NodeFacet)> = concave_neighbours(surface, bvh, x, (s, facet), radius)
         .filter(|(_, pair, cos)| *cos <= cos_kink && pair.projection.is_inside(LOST_TOLERANCE))
         .map(|(g, pair, _)| (g, pair))
-        .min_by(|(f, a), (g, b)| a.gap().total_cmp(&b.gap()).then(f.cmp(g)))
+        .collect();
+    let smallest = candidates
+        .iter()
+        .map(|(_, pair)| pair.gap())
+        .fold(f64::INFINITY, f64::min);
+    let tied = candidates
+        .into_iter()
+        .filter(|(_, pair)| pair.gap() <= smallest + hysteresis.tolerance);
+    let inside = |pair: &NodeFacet| {
+        pair.projection
+            .shape
+            .into_iter()
+            .fold(f64::INFINITY, f64::min)
+    };
+    tied.min_by(|(f, a), (g, b)| {
+        let kept = |h: &u32| Some(*h) != hysteresis.previous;
+        kept(f)
+            .cmp(&kept(g))
+            .then(inside(b).total_cmp(&inside(a)))
+            .then(f.cmp(g))
+    })
 }
 
 /// The largest `−P_G` over the facets `G` near node `s` (within twice `facet`'s size plus the
@@ -187,7 +222,11 @@ mod tests {
         let s = x.len() - 1;
         let surface = Surface::new(facets, x.len()).expect("surface");
         let bvh = Bvh::build(&surface, &x, 1.0).expect("tree");
-        second_flank(&surface, &bvh, &x, (s, f), 1.0).map(|(g, pair)| {
+        let none = Hysteresis {
+            previous: None,
+            tolerance: 0.0,
+        };
+        second_flank(&surface, &bvh, &x, (s, f), (1.0, none)).map(|(g, pair)| {
             let [a, b, c] = surface.corners(g, &x);
             let direct = NodeFacet::new(a, b, c, node).expect("pair");
             assert_eq!(pair.gap(), direct.gap());
@@ -215,6 +254,50 @@ mod tests {
             let below = Vec3::new(-0.01, 0.5, -0.02);
             assert_eq!(second(x, facets, below, 0), None, "profile {sign}");
         }
+    }
+
+    /// The valley of [`profile`] with slopes `±t` (a kink of `2 atan t`), a node on its left
+    /// flank just past the valley line, behind both: its second flank, if any.
+    fn second_at_slope(t: f64) -> Option<u32> {
+        let (mut x, facets) = profile(1.0);
+        for p in &mut x {
+            p.z = t * p.x.abs();
+        }
+        second(x, facets, Vec3::new(0.01, 0.5, -0.02), 0)
+    }
+
+    #[test]
+    fn the_second_flank_needs_a_kink_of_fifteen_degrees() {
+        let slope = |degrees: f64| (degrees.to_radians() / 2.0).tan();
+        assert_eq!(second_at_slope(slope(14.0)), None);
+        assert_eq!(second_at_slope(slope(16.0)), Some(3));
+    }
+
+    /// A floor `F` (in `z = 0`) and a wall `G` rising at 45° from its edge `x = 0`, meshed
+    /// apart, the wall's corner at `(0, 1)` moved `behind` below the floor's plane (as the corner
+    /// nodes of parts meshed apart move as they deform): concave while that is within `10⁻³` of
+    /// the floor's size (√2).
+    #[test]
+    fn a_corner_slightly_behind_the_other_plane_still_counts_as_concave() {
+        let concave_with = |behind: f64| {
+            let x = vec![
+                Vec3::new(-1.0, 0.0, 0.0),
+                Vec3::new(0.0, 0.0, 0.0),
+                Vec3::new(0.0, 1.0, 0.0),
+                Vec3::new(1.0, 0.5, 1.0),
+                Vec3::new(0.0, 0.0, 0.0),
+                Vec3::new(0.0, 1.0, -behind),
+            ];
+            let (floor, wall) = ([0u32, 1, 2], [4u32, 3, 5]);
+            let pair = |f: [u32; 3]| {
+                let [a, b, c] = f.map(|n| x[n as usize]);
+                NodeFacet::new(a, b, c, Vec3::new(-0.1, 0.4, 0.5)).expect("pair")
+            };
+            concave(&x, (&pair(floor), &floor), (&pair(wall), &wall))
+        };
+        assert!(concave_with(0.0));
+        assert!(concave_with(1e-3));
+        assert!(!concave_with(2e-3));
     }
 
     #[test]

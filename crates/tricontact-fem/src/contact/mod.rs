@@ -66,7 +66,9 @@
 //!   flanks, and a node held on one flank's plane can be pushed across the valley line, behind
 //!   the other. With a penalty or the augmented Lagrangian the flank across the kink is a second
 //!   constraint, with its own multiplier estimate ([`state::SecondFlank`]; the Uzawa update and
-//!   the augmented Lagrangian's gap check take it too). `examples/v-groove` (a wedge pressed into
+//!   the augmented Lagrangian's gap check take it too, and the two estimates trade places when
+//!   the node's facet and its second flank do). One second constraint at most: in a corner of
+//!   three concave planes the third is measured, not held. `examples/v-groove` (a wedge pressed into
 //!   a V-groove, a row of its bottom nodes on the valley line): with one constraint per node its
 //!   valley nodes cycled between the flanks, and the penalty and the augmented Lagrangian failed
 //!   at 75 % of the press; now 4 increments, 17 and 29 iterations. Only kinks of at least
@@ -350,7 +352,11 @@ impl ContactTerms {
     ) -> Option<(u32, [usize; 3], tricontact::NodeFacet)> {
         let pass = &self.pairs[p].passes[q];
         let s = pass.slaves[j];
-        let (g, _) = flank::second_flank(&pass.surface, bvh, x, (s, f), pass.radius)?;
+        let hysteresis = flank::Hysteresis {
+            previous: self.trial[p][q][j].second.facet,
+            tolerance: HYSTERESIS * self.pairs[p].facet_size,
+        };
+        let (g, _) = flank::second_flank(&pass.surface, bvh, x, (s, f), (pass.radius, hysteresis))?;
         let nodes = pass.surface.facets()[g as usize].map(|a| a as usize);
         let local = nodes.map(|a| self.relative(u, a, s));
         let pair = tricontact::NodeFacet::new(local[0], local[1], local[2], Vec3::zeros()).ok()?;
@@ -677,8 +683,9 @@ fn closed_terms(
 /// The second constraint of slave node `s` (see [`flank`]) with a penalty, or with the
 /// augmented Lagrangian where `augmented`: against `second` (the flank's facet, its nodes and the
 /// pair; `None`, the node has none), closed when the method wants it (`P_G ≤ 0`;
-/// `λ̂ = λ_k + αP_G < 0`), then its terms scattered into `out`. No status cycling is counted for
-/// it: it follows the node's own facet, which is.
+/// `λ̂ = λ_k + αP_G < 0`), then its terms scattered into `out`. Its status is decided afresh at
+/// each evaluation (no cycling is counted or held for it, unlike the node's own), its facet with
+/// a hysteresis ([`flank::second_flank`]).
 fn second_terms(
     st: &mut state::SecondFlank,
     second: Option<&(u32, [usize; 3], tricontact::NodeFacet)>,
@@ -856,6 +863,14 @@ impl ExtraTerms for ContactTerms {
                         _ => None,
                     };
                     let st = &mut self.trial[p][q][j];
+                    // The own facet and the second flank trading places (a node crossing a
+                    // valley line): each multiplier estimate stays with its facet.
+                    if let (Some((f, _, _)), Some((g, _, _))) = (&eval, &second)
+                        && st.facet == Some(*g)
+                        && st.second.facet == Some(*f)
+                    {
+                        std::mem::swap(&mut st.lambda_k, &mut st.second.lambda_k);
+                    }
                     let was_active = st.active;
                     moved += usize::from(follow_facet(st, eval.as_ref()));
                     if st.facet_frozen {
@@ -879,11 +894,11 @@ impl ExtraTerms for ContactTerms {
                     let out = (&mut *residual, &mut force[..], &mut *triplets);
                     let augmented = method == ContactMethod::Augmented;
                     second_terms(&mut st.second, second.as_ref(), (augmented, alpha), s, out)?;
-                    two += usize::from(st.second.active);
+                    two += usize::from(st.active && st.second.active);
                     if st.held {
                         held += 1;
                     }
-                    if st.active {
+                    if st.active || st.second.active {
                         active_count += 1;
                     }
                     if st.active != was_active {

@@ -6,10 +6,12 @@
 //! * `contact_pressure`: `|contact_force| / A` with `A = ∫N_a dA` the node's lumped area on its
 //!   contact surface; at the corners of tri6 faces, where `∫N_a dA = 0`, the mean over the
 //!   mid-side nodes next to it (0 for other nodes without area);
-//! * `contact_gap`: the slave node's gap `P` (first pass; 0 without facet);
+//! * `contact_gap`: the slave node's gap `P` (first pass; 0 without facet), near a concave kink
+//!   the smaller of its own and its second flank's;
 //! * `contact_status`: 1 closed (on its own constraint or on a second flank), 0 open (slave
 //!   nodes);
-//! * `contact_facet`: Gmsh tag of the master face a closed slave node is on (0 when open).
+//! * `contact_facet`: Gmsh tag of the master face a closed slave node is on (its own facet's, or
+//!   its second flank's where only that is closed; 0 when open).
 //!
 //! History columns per pair `<slave>-<master>`: `_normal_force` (`Σ −λ` over all slave nodes and
 //! passes, a second flank's `λ` included), `_active` (nodes closed on either constraint, of both
@@ -52,13 +54,20 @@ impl ContactTerms {
                 for (j, &s) in pass.slaves.iter().enumerate() {
                     let st = &self.committed[p][q][j];
                     if q == 0 {
-                        gap[s] = st.gap;
+                        // Near a concave kink the master is the union of the two flanks'
+                        // half-spaces: the node's gap is the smaller.
+                        gap[s] = match st.second.facet {
+                            Some(_) => st.gap.min(st.second.gap),
+                            None => st.gap,
+                        };
                     }
                     if st.active || st.second.active {
                         status[s] = 1.0;
                     }
-                    if st.active && q == 0 {
-                        facet[s] = st.facet.map_or(0.0, |f| pass.face_tags[f as usize] as f64);
+                    // The face a closed node is on: its own, else its second flank's.
+                    let on = if st.active { st.facet } else { st.second.facet };
+                    if (st.active || st.second.active) && q == 0 {
+                        facet[s] = on.map_or(0.0, |f| pass.face_tags[f as usize] as f64);
                     }
                 }
             }
