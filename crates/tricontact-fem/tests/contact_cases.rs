@@ -1391,13 +1391,7 @@ fn penetration_behind_the_other_flank_of_a_corner_is_reported() {
         println!(
             "corner, {method}: constrained gap {gap:.3e}, reported penetration {reported:.3e}"
         );
-        let two = terms
-            .states()
-            .iter()
-            .flatten()
-            .flatten()
-            .filter(|st| st.second.active)
-            .count();
+        let (two, second) = common::second_flanks(&terms);
         println!("corner, {method}: {two} nodes on two flanks");
         assert!(gap < 1e-3, "{method}: constrained gap {gap}");
         if method == "multiplier" {
@@ -1408,13 +1402,6 @@ fn penetration_behind_the_other_flank_of_a_corner_is_reported() {
             );
         } else {
             assert!(two > 0, "{method}: no node on two flanks");
-            let second = terms
-                .states()
-                .iter()
-                .flatten()
-                .flatten()
-                .filter(|st| st.second.active)
-                .fold(0.0f64, |m, st| m.max(-st.second.gap));
             assert!(
                 reported <= gap.max(second) * (1.0 + 1e-9),
                 "{method}: reported {reported}, gaps {gap} and {second}"

@@ -71,13 +71,7 @@ fn a_wedge_pressed_into_a_v_groove_is_held_by_both_flanks() {
             let an = common::analysis(mesh.clone(), &model(method));
             let (terms, records, _) = common::solve_contact(&an);
             let last = records.last().expect("increments");
-            let two = terms
-                .states()
-                .iter()
-                .flatten()
-                .flatten()
-                .filter(|st| st.second.active)
-                .count();
+            let (two, _) = common::second_flanks(&terms);
             let force = column(&terms, "_normal_force");
             let depth = column(&terms, "_max_penetration");
             println!(

@@ -213,3 +213,17 @@ pub fn v_groove(
     }
     tricontact_fem::structured::stack(&lower, &upper, [0.0, 0.0, 0.0])
 }
+
+/// The slave nodes closed on a second flank at the committed state (`contact::flank`): how
+/// many, and the deepest penetration `−P_G` of those flanks (0 for none).
+pub fn second_flanks(terms: &tricontact_fem::contact::ContactTerms) -> (usize, f64) {
+    terms
+        .states()
+        .iter()
+        .flatten()
+        .flatten()
+        .filter(|st| st.second.active)
+        .fold((0, 0.0f64), |(n, deepest), st| {
+            (n + 1, deepest.max(-st.second.gap))
+        })
+}
