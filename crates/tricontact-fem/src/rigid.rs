@@ -69,14 +69,31 @@ pub fn check_supports_with(
     prescribed: &[bool],
     held: &[(usize, [f64; 3])],
 ) -> Result<(), String> {
-    match free_parts(an, prescribed, held).into_iter().next() {
-        Some((_, m)) => Err(m),
+    match first_free_part(an, prescribed, held) {
+        Some(m) => Err(format!("{m}; add supports")),
         None => Ok(()),
     }
 }
 
+/// The description of the first body component [`free_parts`] finds, `None` when every one is
+/// held.
+///
+/// # Panics
+/// As [`check_supports_with`].
+pub(crate) fn first_free_part(
+    an: &Analysis,
+    prescribed: &[bool],
+    held: &[(usize, [f64; 3])],
+) -> Option<String> {
+    free_parts(an, prescribed, held)
+        .into_iter()
+        .next()
+        .map(|(_, m)| m)
+}
+
 /// Every body component that the `prescribed` DOFs and the `held` directions leave with a free
-/// rigid-body mode: its nodes and the description [`check_supports_with`] gives.
+/// rigid-body mode: its nodes and a description ("the body part containing node 7 has 3
+/// unconstrained rigid-body mode(s)"; [`check_supports_with`] adds what to do).
 ///
 /// # Panics
 /// As [`check_supports_with`].
@@ -154,8 +171,7 @@ pub(crate) fn free_parts(
             } else {
                 format!("node {tag} of a rigid contact surface (no volume element)")
             };
-            let message =
-                format!("{part} has {free} unconstrained rigid-body mode(s); add supports");
+            let message = format!("{part} has {free} unconstrained rigid-body mode(s)");
             free_parts.push((nodes, message));
         }
     }

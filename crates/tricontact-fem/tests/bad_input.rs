@@ -157,7 +157,8 @@ fn body_without_supports_is_reported_singular() {
     let e = driver::run(&an, &mut NoExtra, &mut |_| Ok(())).expect_err("singular");
     assert!(matches!(e, FemError::Singular(_)), "{e}");
     assert!(
-        e.to_string().contains("6 unconstrained rigid-body mode"),
+        e.to_string()
+            .contains("6 unconstrained rigid-body mode(s); add supports"),
         "{e}"
     );
     // Partially supported: a single fixed node leaves the 3 rotations free.

@@ -442,7 +442,9 @@ fn a_body_held_only_along_contact_normals_is_noted() {
     assert_eq!(notes.len(), 2, "{notes:?}");
     assert!(
         notes[0].starts_with("step 'press': with its boundaries and the initial contact normals")
-            && notes[0].contains("has 3 unconstrained rigid-body mode(s)"),
+            && notes[0].contains(
+                "has 3 unconstrained rigid-body mode(s); frictionless contact leaves such motion"
+            ),
         "{notes:?}"
     );
 }

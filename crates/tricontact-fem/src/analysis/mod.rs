@@ -237,12 +237,11 @@ impl Analysis {
         let held = held_along(&reach, |_| true);
         for (s, step) in self.steps.iter().enumerate() {
             let (mask, _) = crate::driver::step_constraints(self, s);
-            if let Err(m) = crate::rigid::check_supports_with(self, &mask, &held) {
+            if let Some(m) = crate::rigid::first_free_part(self, &mask, &held) {
                 notes.push(format!(
-                    "step '{}': with its boundaries and the initial contact normals, {}; \
+                    "step '{}': with its boundaries and the initial contact normals, {m}; \
                      frictionless contact leaves such motion undetermined",
                     step.name,
-                    m.trim_end_matches("; add supports")
                 ));
             } else if s == 0 {
                 notes.extend(self.open_gaps(&reach, &mask).iter().map(OpenGap::note));
@@ -269,7 +268,7 @@ impl Analysis {
         }
         let reach = self.initial_reach();
         let (mask, _) = crate::driver::step_constraints(self, 0);
-        if crate::rigid::check_supports_with(self, &mask, &held_along(&reach, |_| true)).is_err() {
+        if crate::rigid::first_free_part(self, &mask, &held_along(&reach, |_| true)).is_some() {
             return Vec::new();
         }
         self.open_gaps(&reach, &mask)
@@ -293,7 +292,7 @@ impl Analysis {
                     .min_by(|a, b| a.gap.total_cmp(&b.gap))?;
                 Some(OpenGap {
                     step: self.steps[0].name.clone(),
-                    free: message.trim_end_matches("; add supports").to_string(),
+                    free: message,
                     pair: self.contacts[nearest.pair].name.clone(),
                     node: self.mesh.node_tags[nearest.slave],
                     gap: nearest.gap,
