@@ -10,8 +10,9 @@
 //! constraints, `P_F ≥ 0` and `P_G ≥ 0`.
 //!
 //! The candidates `G` are the facets near the node, within twice `F`'s longest edge plus the
-//! node's gap (the two flanks need not share nodes: a wall meshed apart from its floor), concave
-//! to `F` (below), whose projection region the node is near (within [`LOST_TOLERANCE`]).
+//! node's gap and within the search distance (the two flanks need not share nodes: a wall
+//! meshed apart from its floor), concave to `F` (below), whose projection region the node is
+//! near (within [`LOST_TOLERANCE`]).
 //! * [`second_flank`] gives the facet of the second constraint, which the penalty and the
 //!   augmented Lagrangian enforce beside the first (see `contact/mod.rs`): among the candidates
 //!   with a kink (the angle between the normals) of at least [`ENFORCED_KINK_DEGREES`], the one
@@ -27,9 +28,9 @@
 //! the other, but for that margin: the corner nodes of a wall meshed apart from its floor, which
 //! start on the floor's plane, move off it as the parts deform; with `10⁻⁹` there too a node in
 //! such a corner lost and regained its second constraint from one iteration to the next, and
-//! Newton cycled): on a flat, convex or saddle-shaped surface `G` is never counted, so a node inside the body near a ridge, which projects into both flanks,
-//! has only its own constraint, and a node outside below a thin plate is not taken as behind the
-//! plate's far side.
+//! Newton cycled): on a flat, convex or saddle-shaped surface `G` is never counted, so a node
+//! inside the body near a ridge, which projects into both flanks, has only its own constraint,
+//! and a node outside below a thin plate is not taken as behind the plate's far side.
 
 use super::LOST_TOLERANCE;
 use tricontact::search::{Bvh, Query, Surface};
@@ -152,10 +153,11 @@ pub fn second_flank(
             .into_iter()
             .fold(f64::INFINITY, f64::min)
     };
+    // Ordered: the previous second flank first, then the deepest inside, then the lowest index.
     tied.min_by(|(f, a), (g, b)| {
-        let kept = |h: &u32| Some(*h) != hysteresis.previous;
-        kept(f)
-            .cmp(&kept(g))
+        let other = |h: &u32| Some(*h) != hysteresis.previous;
+        other(f)
+            .cmp(&other(g))
             .then(inside(b).total_cmp(&inside(a)))
             .then(f.cmp(g))
     })
