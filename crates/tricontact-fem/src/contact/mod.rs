@@ -1085,6 +1085,49 @@ mod tests {
         terms
     }
 
+    /// A node of the V-groove example's valley row moved just below the valley line, to one side
+    /// and then to the other: its own facet and its second flank trade places, and so do their
+    /// augmented-Lagrangian multiplier estimates.
+    #[test]
+    fn the_estimates_trade_places_when_the_facet_and_the_second_flank_do() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../examples/v-groove/augmented.toml");
+        let model = Model::load(&path).expect("v-groove model");
+        let mesh = crate::gmsh::read_msh(&model.mesh_path()).expect("v-groove mesh");
+        let an = Analysis::new(&model, mesh).expect("v-groove analysis");
+        let mut terms = ContactTerms::new(&an);
+        let mut u = vec![0.0; 3 * an.mesh.nodes.len()];
+        terms.begin_increment(&u).expect("begin");
+        let slaves = &terms.pairs[0].passes[0].slaves;
+        let j = (0..slaves.len())
+            .find(|&j| {
+                let x = an.mesh.nodes[slaves[j]];
+                (x[0] - 1.0).abs() < 1e-12 && x[1] > 0.3 && x[1] < 0.4
+            })
+            .expect("a node on the valley line");
+        let s = slaves[j];
+        // 0.008 below the valley line and 0.005 to one side: behind both flanks, in the
+        // projection region of the near one, within reach of the far one's.
+        let mut at = |side: f64, terms: &mut ContactTerms| {
+            u[3 * s] = 0.005 * side;
+            u[3 * s + 2] = -0.008;
+            let (mut r, mut k) = (vec![0.0; u.len()], Vec::new());
+            terms.add_terms(&u, &mut r, &mut k).expect("terms");
+            let st = &terms.trial[0][0][j];
+            (st.facet, st.second.facet)
+        };
+        let (own, second) = at(-1.0, &mut terms);
+        assert!(
+            own.is_some() && second.is_some() && own != second,
+            "{own:?} {second:?}"
+        );
+        terms.trial[0][0][j].lambda_k = -1.0;
+        terms.trial[0][0][j].second.lambda_k = -2.0;
+        assert_eq!(at(1.0, &mut terms), (second, own));
+        let st = &terms.trial[0][0][j];
+        assert_eq!((st.lambda_k, st.second.lambda_k), (-2.0, -1.0));
+    }
+
     #[test]
     fn a_node_held_closed_may_not_pull_beyond_the_tolerance_or_a_share_of_the_push() {
         let mut terms = patch_terms();
