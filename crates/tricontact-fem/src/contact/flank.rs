@@ -100,7 +100,10 @@ fn concave_neighbours<'a>(
     hits.into_iter().filter_map(move |hit| {
         let (f_pair, f_nodes) = own.as_ref()?;
         let g = hit.facet;
-        let g_pair = pair_with(g).filter(|_| g != facet)?;
+        if g == facet {
+            return None;
+        }
+        let g_pair = pair_with(g)?;
         let g_nodes = surface.facets()[g as usize];
         concave(x, (f_pair, f_nodes), (&g_pair, &g_nodes))
             .then(|| (g, g_pair, f_pair.facet.normal().dot(&g_pair.facet.normal())))

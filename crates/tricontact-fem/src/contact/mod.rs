@@ -898,7 +898,7 @@ impl ExtraTerms for ContactTerms {
                     if st.held {
                         held += 1;
                     }
-                    if st.active || st.second.active {
+                    if st.closed() {
                         active_count += 1;
                     }
                     if st.active != was_active {
@@ -1070,13 +1070,19 @@ mod tests {
     use super::*;
     use crate::model::Model;
 
+    /// The analysis of the example model `examples/<model>`.
+    fn example(model: &str) -> Analysis {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../examples")
+            .join(model);
+        let model = Model::load(&path).expect("example model");
+        let mesh = crate::gmsh::read_msh(&model.mesh_path()).expect("example mesh");
+        Analysis::new(&model, mesh).expect("example analysis")
+    }
+
     /// The multiplier patch model, its contact terms evaluated once at the reference state.
     fn patch_terms() -> ContactTerms {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../examples/patch/multiplier.toml");
-        let model = Model::load(&path).expect("patch model");
-        let mesh = crate::gmsh::read_msh(&model.mesh_path()).expect("patch mesh");
-        let an = Analysis::new(&model, mesh).expect("patch analysis");
+        let an = example("patch/multiplier.toml");
         let mut terms = ContactTerms::new(&an);
         let u = vec![0.0; 3 * an.mesh.nodes.len() + terms.num_extra()];
         terms.begin_increment(&u).expect("begin");
@@ -1090,11 +1096,7 @@ mod tests {
     /// augmented-Lagrangian multiplier estimates.
     #[test]
     fn the_estimates_trade_places_when_the_facet_and_the_second_flank_do() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../examples/v-groove/augmented.toml");
-        let model = Model::load(&path).expect("v-groove model");
-        let mesh = crate::gmsh::read_msh(&model.mesh_path()).expect("v-groove mesh");
-        let an = Analysis::new(&model, mesh).expect("v-groove analysis");
+        let an = example("v-groove/augmented.toml");
         let mut terms = ContactTerms::new(&an);
         let mut u = vec![0.0; 3 * an.mesh.nodes.len()];
         terms.begin_increment(&u).expect("begin");

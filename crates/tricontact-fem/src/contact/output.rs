@@ -61,13 +61,13 @@ impl ContactTerms {
                             None => st.gap,
                         };
                     }
-                    if st.active || st.second.active {
+                    if st.closed() {
                         status[s] = 1.0;
-                    }
-                    // The face a closed node is on: its own, else its second flank's.
-                    let on = if st.active { st.facet } else { st.second.facet };
-                    if (st.active || st.second.active) && q == 0 {
-                        facet[s] = on.map_or(0.0, |f| pass.face_tags[f as usize] as f64);
+                        // The face it is on: its own, else its second flank's.
+                        let on = if st.active { st.facet } else { st.second.facet };
+                        if q == 0 {
+                            facet[s] = on.map_or(0.0, |f| pass.face_tags[f as usize] as f64);
+                        }
                     }
                 }
             }
@@ -103,7 +103,7 @@ impl ContactTerms {
                     if st.facet.is_some() {
                         pen = pen.max(-st.gap).max(st.flank);
                     }
-                    if st.active || st.second.active {
+                    if st.closed() {
                         active += 1;
                         area += pass.areas[j];
                         if let Some(p) = self.pressure(pass.slaves[j]) {

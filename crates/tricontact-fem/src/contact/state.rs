@@ -43,6 +43,14 @@ pub struct NodeState {
     pub second: SecondFlank,
 }
 
+impl NodeState {
+    /// Closed on its own constraint or on its second flank.
+    #[must_use]
+    pub fn closed(&self) -> bool {
+        self.active || self.second.active
+    }
+}
+
 /// The state of a node's second constraint ([`super::flank::second_flank`]) at the last
 /// evaluation: as the node's own, with a multiplier estimate of its own.
 #[derive(Clone, Debug, Default, PartialEq)]
