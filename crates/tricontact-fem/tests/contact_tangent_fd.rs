@@ -1,7 +1,7 @@
 //! The assembled global tangent (solids + contact) against central finite differences of the
 //! assembled residual, for the three methods, on two overlapping blocks shifted so that slave nodes
-//! sit inside facets (away from edges, where `∇²P` jumps); and for the penalty and the augmented
-//! Lagrangian with nodes in a concave valley, on two flanks.
+//! sit inside facets (away from edges, where `∇²P` jumps); and for the three methods with nodes in
+//! a concave valley, on two flanks (with multipliers, two unknowns for such a node).
 #![allow(clippy::needless_range_loop)]
 
 mod common;
@@ -186,4 +186,9 @@ fn global_tangent_matches_finite_differences_on_two_flanks_penalty() {
 #[test]
 fn global_tangent_matches_finite_differences_on_two_flanks_augmented() {
     assert!(valley("augmented") < 1e-6);
+}
+
+#[test]
+fn global_tangent_matches_finite_differences_on_two_flanks_multiplier() {
+    assert!(valley("multiplier") < 1e-6);
 }

@@ -1,7 +1,7 @@
 //! A concave valley of the master: a wedge pressed into a V-groove, a row of its bottom nodes on
 //! the valley line. One constraint per node cannot hold such a node (it is pushed from one flank
-//! across to the other); with a penalty or the augmented Lagrangian the flank across the kink is
-//! a second constraint (`contact::flank::second_flank`).
+//! across to the other); the flank across the kink is a second constraint
+//! (`contact::flank::second_flank`), with each method.
 
 mod common;
 
@@ -57,16 +57,16 @@ fn column(terms: &ContactTerms, key: &str) -> f64 {
         .expect("column")
 }
 
-/// Penalty and augmented Lagrangian: the press converges in its four increments, the nodes on the
-/// valley line end on two flanks, and nothing lies deeper behind any flank than the method's
-/// own gaps (the penalty's about `F/α`, the augmented's within its tolerance). Multipliers, one
-/// constraint per node, converge too but leave the valley nodes behind the other flank, and
-/// report it.
+/// Each method: the press converges in its four increments, the nodes on the valley line end on
+/// two flanks, and nothing lies deeper behind any flank than the method's own gaps (the
+/// penalty's about `F/α`, the augmented's within its tolerance, the multipliers' round-off).
+/// With one constraint per node the multipliers left the valley nodes 7.8·10⁻³ behind the other
+/// flank (hex8) and the other two methods failed at 75 % of the press.
 #[test]
 fn a_wedge_pressed_into_a_v_groove_is_held_by_both_flanks() {
-    let mut forces = Vec::new();
     for kind in [ElementKind::Hex8, ElementKind::Tet4] {
         let mesh = common::v_groove([16, 4, 4], [8, 3, 3], kind);
+        let mut forces = Vec::new();
         for method in ["penalty", "augmented", "multiplier"] {
             let an = common::analysis(mesh.clone(), &model(method));
             let (terms, records, _) = common::solve_contact(&an);
@@ -79,24 +79,30 @@ fn a_wedge_pressed_into_a_v_groove_is_held_by_both_flanks() {
                 records.len()
             );
             assert_eq!(last.load_factor, 1.0, "{kind:?} {method}");
-            match method {
-                "multiplier" => {
-                    assert_eq!(two, 0);
-                    assert!(depth > 1e-3, "{kind:?}: the unheld flank reported: {depth}");
-                }
-                _ => {
-                    // Four increments: none cut back.
-                    assert_eq!(records.len(), 4, "{kind:?} {method}");
-                    assert!(two >= 4, "{kind:?} {method}: {two} nodes on two flanks");
-                    let bound = if method == "penalty" { 1e-3 } else { 1e-5 };
-                    assert!(depth < bound, "{kind:?} {method}: penetration {depth}");
-                    forces.push(force);
-                }
-            }
+            // Four increments: none cut back.
+            assert_eq!(records.len(), 4, "{kind:?} {method}");
+            assert!(two >= 4, "{kind:?} {method}: {two} nodes on two flanks");
+            // The groove is 2 wide and 1 deep: lengths of order one.
+            let bound = match method {
+                "penalty" => 1e-3,
+                "augmented" => 1e-5,
+                _ => 1e-12,
+            };
+            assert!(depth < bound, "{kind:?} {method}: penetration {depth}");
+            forces.push(force);
         }
-    }
-    // Penalty and augmented agree on the force within the penalty's compliance.
-    for pair in forces.chunks(2) {
-        assert!((pair[0] - pair[1]).abs() < 0.02 * pair[1], "{pair:?}");
+        // The augmented Lagrangian and the multipliers agree on the force within its tolerance,
+        // the penalty within its compliance.
+        let [penalty, augmented, multiplier] = forces[..] else {
+            panic!("three methods");
+        };
+        assert!(
+            (multiplier - augmented).abs() < 1e-3 * multiplier,
+            "{forces:?}"
+        );
+        assert!(
+            (penalty - multiplier).abs() < 0.02 * multiplier,
+            "{forces:?}"
+        );
     }
 }

@@ -13,8 +13,8 @@
 //! node's gap and within the search distance (the two flanks need not share nodes: a wall
 //! meshed apart from its floor), concave to `F` (below), whose projection region the node is
 //! near (within [`LOST_TOLERANCE`]).
-//! * [`second_flank`] gives the facet of the second constraint, which the penalty and the
-//!   augmented Lagrangian enforce beside the first (see `contact/mod.rs`): among the candidates
+//! * [`second_flank`] gives the facet of the second constraint, which every method enforces
+//!   beside the first with finite sliding (see `contact/mod.rs`): among the candidates
 //!   with a kink (the angle between the normals) of at least [`ENFORCED_KINK_DEGREES`], the one
 //!   with the smallest `P_G` (with a hysteresis among tied ones). Below that kink, where a smooth
 //!   curved master's facets meet, the one constraint serves, as before. One second constraint at
@@ -38,7 +38,7 @@ use tricontact::{NodeFacet, Vec3};
 
 /// The smallest kink, the angle between the normals of two concave facets, at which
 /// [`second_flank`] enforces the second one. At 15° the V-groove of `examples/v-groove` (a kink
-/// of 53°) converges with a penalty and the augmented Lagrangian, and every other example's
+/// of 53°) converges with each method, and every other example's
 /// solution is unchanged; an earlier trial that took every concave neighbour (0°, or 5°) made runs
 /// that converge fail, the nearly flat kinks of a finely meshed curved surface counting (the
 /// README's "Concave edges and corners").

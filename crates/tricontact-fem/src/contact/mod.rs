@@ -13,12 +13,15 @@
 //! there exceeds the chosen one's by at most `HYSTERESIS · h` (no flip-flopping across an edge,
 //! where `∇²P` jumps, from round-off); and while it penetrates its previous facet (foot within
 //! [`LOST_TOLERANCE`]) it takes no facet facing the other way (no tunnelling through a thin
-//! part whose far side a Newton step brought nearer). With a penalty or the augmented
-//! Lagrangian (finite sliding), a node near a concave kink of at least
+//! part whose far side a Newton step brought nearer). With finite sliding (any method), a node
+//! near a concave kink of at least
 //! [`flank::ENFORCED_KINK_DEGREES`] between its facet and a neighbour gets a **second**
 //! constraint, on that neighbour ([`flank::second_flank`]; see "Concave kinks" below). The node's
 //! terms ([`penalty`], [`multiplier`], [`augmented`]) are scattered to global DOFs `3·node + d`;
-//! multipliers are extra unknowns after the nodal DOFs, one per slave node of each multiplier pair.
+//! multipliers are extra unknowns after the nodal DOFs: per multiplier pair, one per slave node
+//! for its own constraint and, with finite sliding, one more for its second flank (the own ones
+//! first, then the second flanks', slave by slave; `λ = 0` while a node has no second flank or it
+//! is open).
 //!
 //! Sign conventions (the kernel's): `P > 0` open, `P < 0` penetrating; the constraint enters as
 //! `Π + λP`, compression is `λ ≤ 0`, the contact force on the slave node is `−λW`.
@@ -64,21 +67,25 @@
 //!   edge, and Newton diverged; `tests/contact_cases.rs`).
 //! * Concave kinks: near a valley the master body is the union of the half-spaces behind the two
 //!   flanks, and a node held on one flank's plane can be pushed across the valley line, behind
-//!   the other. With a penalty or the augmented Lagrangian the flank across the kink is a second
-//!   constraint, with its own multiplier estimate ([`state::SecondFlank`]; the Uzawa update and
-//!   the augmented Lagrangian's gap check take it too, and the two estimates trade places when
-//!   the node's facet and its second flank do). One second constraint at most: in a corner of
-//!   three concave planes the third is measured, not held. `examples/v-groove` (a wedge pressed into
-//!   a V-groove, a row of its bottom nodes on the valley line): with one constraint per node its
-//!   valley nodes cycled between the flanks, and the penalty and the augmented Lagrangian failed
-//!   at 75 % of the press; now 4 increments, 17 and 29 iterations. Only kinks of at least
+//!   the other. With finite sliding the flank across the kink is a second constraint
+//!   ([`state::SecondFlank`]): with the augmented Lagrangian it has its own multiplier estimate
+//!   (the Uzawa update and the gap check take it too), with multipliers its own unknown (its
+//!   switch, like the penalty's and the augmented Lagrangian's status for it, decided afresh at
+//!   each iteration), and the two estimates or unknowns trade places when the node's facet and
+//!   its second flank do (for the unknowns, [`state::SecondFlank::traded`] says which is
+//!   which). One second constraint at most: in a corner of three concave planes the third is
+//!   measured, not held. `examples/v-groove` (a wedge pressed into a V-groove, a row of its
+//!   bottom nodes on the valley line): with one constraint per node its valley nodes cycled
+//!   between the flanks, the penalty and the augmented Lagrangian failed at 75 % of the press,
+//!   and the multipliers left them 7.8·10⁻³ behind the other flank; now 4 increments, 17, 29 and
+//!   10 iterations, the multipliers' nodes behind neither (2.6·10⁻¹⁵). Only kinks of at least
 //!   [`flank::ENFORCED_KINK_DEGREES`] count: an earlier trial took every concave neighbour the
 //!   node was behind, and runs that converge failed (`sliding` pressed 0.1 with a penalty, in its
 //!   press at 0° and in its slide at 5°; `sliding` as given 213 → 281 iterations and
 //!   `contact-block` with a penalty 81 → 118 at 0°), the nearly flat kinks of a finely meshed
-//!   curved surface counting; at 15° every other example's solution is unchanged. Multipliers (one
-//!   unknown per node) and `small_sliding` keep one constraint; what it leaves unheld is
-//!   measured ([`flank::flank_penetration`]) and reported.
+//!   curved surface counting; at 15° every other example's solution is unchanged. With
+//!   `small_sliding` a node keeps one constraint; what it leaves unheld is measured
+//!   ([`flank::flank_penetration`]) and reported.
 //! * The node states (facet, shape functions, normal, multiplier estimate, status) are committed at
 //!   convergence and restored on a cutback.
 
@@ -152,9 +159,7 @@ impl ContactTerms {
         let mut n_extra = 0;
         for p in &pairs {
             offsets.push(n_extra);
-            if p.method == ContactMethod::Multiplier {
-                n_extra += p.passes[0].slaves.len();
-            }
+            n_extra += multipliers(p);
         }
         let state: Vec<Vec<Vec<NodeState>>> = pairs
             .iter()
@@ -767,6 +772,76 @@ fn multiplier_node(
     Ok(())
 }
 
+/// The second constraint of slave node `s` with Lagrange multipliers, its multiplier the unknown
+/// `ldof` (value in `u`): against `second` (the flank's facet, its nodes and the pair; `None`, the
+/// node has none), the active block (`c = P_G = 0`) where the switch `κP_G + λ ≤ 0` wants it, the
+/// inactive one (`λ = 0`) otherwise. Its status is decided afresh at each evaluation, as
+/// [`second_terms`]'s.
+fn second_multiplier(
+    st: &mut state::SecondFlank,
+    second: Option<&(u32, [usize; 3], tricontact::NodeFacet)>,
+    alpha: f64,
+    (s, ldof): (usize, usize),
+    u: &[f64],
+    (residual, force, triplets): Out<'_>,
+) -> Result<(), String> {
+    let lambda = u[ldof];
+    st.facet = second.map(|g| g.0);
+    st.gap = second.map_or(0.0, |g| g.2.gap());
+    st.active = second.is_some_and(|g| multiplier::wants_active(g.2.gap(), lambda, alpha));
+    st.lambda = if st.active { lambda } else { 0.0 };
+    let block = match second {
+        Some(&(_, _, pair)) if st.active => {
+            multiplier::active_block(&Gap::Finite(pair), lambda).map_err(geometry)?
+        }
+        _ => multiplier::inactive_block(lambda, alpha),
+    };
+    if let Some(&(_, fnodes, _)) = second
+        && st.active
+    {
+        let nodes = [fnodes[0], fnodes[1], fnodes[2], s];
+        scatter(
+            nodes,
+            &block.residual_u,
+            &block.k_uu,
+            residual,
+            force,
+            triplets,
+        );
+        for i in 0..12 {
+            let d = 3 * nodes[i / 3] + i % 3;
+            triplets.push((d, ldof, block.k_ulambda[i]));
+            triplets.push((ldof, d, block.k_ulambda[i]));
+        }
+    }
+    residual[ldof] += block.residual_lambda;
+    triplets.push((ldof, ldof, block.k_lambdalambda));
+    Ok(())
+}
+
+/// The multiplier unknowns of `pair` among the extra unknowns: with Lagrange multipliers one per
+/// slave node for its own constraint and, with finite sliding, one more for its second flank
+/// (the own ones first, then the second flanks', slave by slave); none otherwise.
+fn multipliers(pair: &ContactPair) -> usize {
+    match pair.method {
+        ContactMethod::Multiplier if pair.small_sliding => pair.passes[0].slaves.len(),
+        ContactMethod::Multiplier => 2 * pair.passes[0].slaves.len(),
+        _ => 0,
+    }
+}
+
+/// The place, among its pair's multiplier unknowns, of the multiplier of slave `j`'s own
+/// constraint (of `slaves`): `j`, or its second flank's place `slaves + j` while the two have
+/// traded facets an odd number of times ([`state::SecondFlank::traded`]).
+fn own_unknown(st: &NodeState, j: usize, slaves: usize) -> usize {
+    if st.second.traded { slaves + j } else { j }
+}
+
+/// The place of the multiplier of slave `j`'s second flank: the other of [`own_unknown`]'s two.
+fn second_unknown(st: &NodeState, j: usize, slaves: usize) -> usize {
+    if st.second.traded { j } else { slaves + j }
+}
+
 impl ExtraTerms for ContactTerms {
     fn num_extra(&self) -> usize {
         self.n_extra
@@ -775,10 +850,9 @@ impl ExtraTerms for ContactTerms {
     fn extra_nodes(&self) -> Vec<Option<usize>> {
         let mut owners = vec![None; self.n_extra];
         for (p, &offset) in self.pairs.iter().zip(&self.offsets) {
-            if p.method == ContactMethod::Multiplier {
-                for (j, &s) in p.passes[0].slaves.iter().enumerate() {
-                    owners[offset + j] = Some(s);
-                }
+            let slaves = &p.passes[0].slaves;
+            for k in 0..multipliers(p) {
+                owners[offset + k] = Some(slaves[k % slaves.len()]);
             }
         }
         owners
@@ -851,25 +925,25 @@ impl ExtraTerms for ContactTerms {
                     let pass = &self.pairs[p].passes[q];
                     Some(Bvh::build(&pass.surface, &x, pass.radius).map_err(|e| e.to_string())?)
                 };
-                for j in 0..self.pairs[p].passes[q].slaves.len() {
+                let slaves = self.pairs[p].passes[q].slaves.len();
+                for j in 0..slaves {
                     let s = self.pairs[p].passes[q].slaves[j];
                     let eval = self.evaluate((p, q, j), &x, u, bvh.as_ref());
-                    let second = match (&eval, &bvh, method) {
-                        (
-                            Some((f, _, _)),
-                            Some(bvh),
-                            ContactMethod::Penalty | ContactMethod::Augmented,
-                        ) => self.second_flank((p, q, j), (bvh, *f), &x, u),
+                    let second = match (&eval, &bvh) {
+                        (Some((f, _, _)), Some(bvh)) => {
+                            self.second_flank((p, q, j), (bvh, *f), &x, u)
+                        }
                         _ => None,
                     };
                     let st = &mut self.trial[p][q][j];
                     // The own facet and the second flank trading places (a node crossing a
-                    // valley line): each multiplier estimate stays with its facet.
+                    // valley line): each multiplier (estimate or unknown) stays with its facet.
                     if let (Some((f, _, _)), Some((g, _, _))) = (&eval, &second)
                         && st.facet == Some(*g)
                         && st.second.facet == Some(*f)
                     {
                         std::mem::swap(&mut st.lambda_k, &mut st.second.lambda_k);
+                        st.second.traded = !st.second.traded;
                     }
                     let was_active = st.active;
                     moved += usize::from(follow_facet(st, eval.as_ref()));
@@ -885,15 +959,30 @@ impl ExtraTerms for ContactTerms {
                             augmented_node(st, was_active, eval.as_ref(), alpha, s, out)?;
                         }
                         ContactMethod::Multiplier => {
-                            let ldof = n_nodal + self.offsets[p] + j;
+                            let ldof = n_nodal + self.offsets[p] + own_unknown(st, j, slaves);
                             let node = (s, ldof);
                             multiplier_node(st, was_active, eval.as_ref(), alpha, node, u, out)?;
                         }
                     }
-                    // The second constraint (none with multipliers or small sliding).
+                    // The second constraint (none with small sliding).
                     let out = (&mut *residual, &mut force[..], &mut *triplets);
-                    let augmented = method == ContactMethod::Augmented;
-                    second_terms(&mut st.second, second.as_ref(), (augmented, alpha), s, out)?;
+                    if method == ContactMethod::Multiplier {
+                        if !small {
+                            let ldof = n_nodal + self.offsets[p] + second_unknown(st, j, slaves);
+                            let node = (s, ldof);
+                            second_multiplier(
+                                &mut st.second,
+                                second.as_ref(),
+                                alpha,
+                                node,
+                                u,
+                                out,
+                            )?;
+                        }
+                    } else {
+                        let augmented = method == ContactMethod::Augmented;
+                        second_terms(&mut st.second, second.as_ref(), (augmented, alpha), s, out)?;
+                    }
                     two += usize::from(st.active && st.second.active);
                     if st.held {
                         held += 1;
@@ -989,12 +1078,7 @@ impl ExtraTerms for ContactTerms {
     fn residual_scales(&self) -> Vec<f64> {
         let mut scales = Vec::with_capacity(self.n_extra);
         for pair in &self.pairs {
-            if pair.method == ContactMethod::Multiplier {
-                scales.extend(std::iter::repeat_n(
-                    pair.penalty,
-                    pair.passes[0].slaves.len(),
-                ));
-            }
+            scales.extend(std::iter::repeat_n(pair.penalty, multipliers(pair)));
         }
         scales
     }
@@ -1091,14 +1175,13 @@ mod tests {
         terms
     }
 
-    /// A node of the V-groove example's valley row moved just below the valley line, to one side
-    /// and then to the other: its own facet and its second flank trade places, and so do their
-    /// augmented-Lagrangian multiplier estimates.
-    #[test]
-    fn the_estimates_trade_places_when_the_facet_and_the_second_flank_do() {
-        let an = example("v-groove/augmented.toml");
+    /// The V-groove example's model `model`, its contact terms begun at the reference state
+    /// (displacements `u`, zero, multipliers included), and the place `j` of a node of its valley
+    /// row among the slave nodes.
+    fn valley_node(model: &str) -> (ContactTerms, Vec<f64>, usize) {
+        let an = example(model);
         let mut terms = ContactTerms::new(&an);
-        let mut u = vec![0.0; 3 * an.mesh.nodes.len()];
+        let u = vec![0.0; 3 * an.mesh.nodes.len() + terms.num_extra()];
         terms.begin_increment(&u).expect("begin");
         let slaves = &terms.pairs[0].passes[0].slaves;
         let j = (0..slaves.len())
@@ -1107,27 +1190,72 @@ mod tests {
                 (x[0] - 1.0).abs() < 1e-12 && x[1] > 0.3 && x[1] < 0.4
             })
             .expect("a node on the valley line");
-        let s = slaves[j];
-        // 0.008 below the valley line and 0.005 to one side: behind both flanks, in the
-        // projection region of the near one, within reach of the far one's.
-        let mut at = |side: f64, terms: &mut ContactTerms| {
-            u[3 * s] = 0.005 * side;
-            u[3 * s + 2] = -0.008;
-            let (mut r, mut k) = (vec![0.0; u.len()], Vec::new());
-            terms.add_terms(&u, &mut r, &mut k).expect("terms");
-            let st = &terms.trial[0][0][j];
-            (st.facet, st.second.facet)
-        };
-        let (own, second) = at(-1.0, &mut terms);
+        (terms, u, j)
+    }
+
+    /// Slave `j` moved 0.008 below the valley line and 0.005 to one `side`: behind both flanks,
+    /// in the projection region of the near one, within reach of the far one's. Returns its
+    /// facet and its second flank after the terms are evaluated there.
+    fn across(
+        terms: &mut ContactTerms,
+        u: &mut [f64],
+        j: usize,
+        side: f64,
+    ) -> (Option<u32>, Option<u32>) {
+        let s = terms.pairs[0].passes[0].slaves[j];
+        u[3 * s] = 0.005 * side;
+        u[3 * s + 2] = -0.008;
+        let (mut r, mut k) = (vec![0.0; u.len()], Vec::new());
+        terms.add_terms(u, &mut r, &mut k).expect("terms");
+        let st = &terms.trial[0][0][j];
+        (st.facet, st.second.facet)
+    }
+
+    /// A node of the V-groove example's valley row moved just below the valley line, to one side
+    /// and then to the other: its own facet and its second flank trade places, and so do their
+    /// augmented-Lagrangian multiplier estimates.
+    #[test]
+    fn the_estimates_trade_places_when_the_facet_and_the_second_flank_do() {
+        let (mut terms, mut u, j) = valley_node("v-groove/augmented.toml");
+        let (own, second) = across(&mut terms, &mut u, j, -1.0);
         assert!(
             own.is_some() && second.is_some() && own != second,
             "{own:?} {second:?}"
         );
         terms.trial[0][0][j].lambda_k = -1.0;
         terms.trial[0][0][j].second.lambda_k = -2.0;
-        assert_eq!(at(1.0, &mut terms), (second, own));
+        assert_eq!(across(&mut terms, &mut u, j, 1.0), (second, own));
         let st = &terms.trial[0][0][j];
         assert_eq!((st.lambda_k, st.second.lambda_k), (-2.0, -1.0));
+    }
+
+    /// The same with Lagrange multipliers: the node's two multiplier unknowns stay with their
+    /// facets, so that the own constraint reads, after the trade, the unknown its new facet had
+    /// as the second flank (and back again after a second trade).
+    #[test]
+    fn the_multiplier_unknowns_stay_with_their_facets_when_these_trade_places() {
+        let (mut terms, mut u, j) = valley_node("v-groove/multiplier.toml");
+        let (n_nodal, slaves) = (
+            3 * terms.reference.len(),
+            terms.pairs[0].passes[0].slaves.len(),
+        );
+        assert_eq!(terms.num_extra(), 2 * slaves);
+        u[n_nodal + j] = -1.0;
+        u[n_nodal + slaves + j] = -2.0;
+        let (own, second) = across(&mut terms, &mut u, j, -1.0);
+        assert!(
+            own.is_some() && second.is_some() && own != second,
+            "{own:?} {second:?}"
+        );
+        let lambdas = |terms: &ContactTerms| {
+            let st = &terms.trial[0][0][j];
+            (st.lambda, st.second.lambda)
+        };
+        assert_eq!(lambdas(&terms), (-1.0, -2.0));
+        assert_eq!(across(&mut terms, &mut u, j, 1.0), (second, own));
+        assert_eq!(lambdas(&terms), (-2.0, -1.0));
+        assert_eq!(across(&mut terms, &mut u, j, -1.0), (own, second));
+        assert_eq!(lambdas(&terms), (-1.0, -2.0));
     }
 
     #[test]

@@ -1,4 +1,5 @@
-//! Lagrange-multiplier enforcement of one node: one unknown `λ` per slave node, the kernel's
+//! Lagrange-multiplier enforcement of one node: one unknown `λ` per slave node and constraint
+//! (a second for a node's second flank at a concave kink, `contact/mod.rs`), the kernel's
 //! primal–dual active-set block ([`tricontact::contact::multiplier_block`], switch
 //! `κP + λ ≤ 0` with `κ` the pair's penalty factor as a scale). A node without a facet is
 //! inactive. Compression is `λ ≤ 0`, the contact force on the slave node `−λW`. Small sliding

@@ -16,8 +16,8 @@ pub struct NodeState {
     pub gap: f64,
     /// At the last convergence, the node's depth behind the master beyond its own facet's
     /// plane: behind a facet across a concave edge of its facet ([`super::flank`]; held by the
-    /// second constraint with a penalty or the augmented Lagrangian where the kink is large
-    /// enough, unheld otherwise), or with `small_sliding` behind the facet it is over now (0 for
+    /// second constraint with finite sliding where the kink is large enough, unheld
+    /// otherwise), or with `small_sliding` behind the facet it is over now (0 for
     /// none).
     pub flank: f64,
     /// Normal multiplier at the last evaluation (`λ`, `αP` or `λ̂`; ≤ 0 in compression, 0 open).
@@ -39,7 +39,7 @@ pub struct NodeState {
     /// Small sliding: facet, shape functions and normal at the start of the increment.
     pub start: Option<(u32, [f64; 3], [f64; 3])>,
     /// The second constraint, against the flank across a concave kink of the node's facet
-    /// (penalty and augmented Lagrangian, finite sliding).
+    /// (finite sliding; with multipliers its multiplier is a second unknown of the node).
     pub second: SecondFlank,
 }
 
@@ -65,4 +65,8 @@ pub struct SecondFlank {
     pub lambda_k: f64,
     /// Closed at the last evaluation.
     pub active: bool,
+    /// Lagrange multipliers: the node's facet and its second flank have traded places an odd
+    /// number of times, so that each multiplier unknown stays with its facet: the own
+    /// constraint's multiplier is the second of the node's two unknowns, the flank's the first.
+    pub traded: bool,
 }
