@@ -106,3 +106,42 @@ fn a_wedge_pressed_into_a_v_groove_is_held_by_both_flanks() {
         );
     }
 }
+
+/// The press in one increment with at most four Newton iterations (three with multipliers):
+/// each method cuts it back (restoring the node states, second flanks and their multipliers
+/// included, from the last converged state) and still ends on two flanks with the normal force
+/// of the four increments (frictionless and elastic, the end state does not depend on the path;
+/// measured: the same to eight digits with the penalty and the multipliers).
+#[test]
+fn the_v_groove_pressed_at_once_is_cut_back_and_ends_as_in_four_increments() {
+    let mesh = common::v_groove([16, 4, 4], [8, 3, 3], ElementKind::Hex8);
+    for method in ["penalty", "augmented", "multiplier"] {
+        let force_of = |text: &str| {
+            let an = common::analysis(mesh.clone(), text);
+            let (terms, records, _) = common::solve_contact(&an);
+            assert_eq!(records.last().expect("increments").load_factor, 1.0);
+            let (two, _) = common::second_flanks(&terms);
+            assert!(two >= 4, "{method}: {two} nodes on two flanks");
+            (column(&terms, "_normal_force"), records.len())
+        };
+        let (stepped, _) = force_of(&model(method));
+        // Fewer iterations than the first increment needs (the multipliers need four).
+        let most = if method == "multiplier" { 3 } else { 4 };
+        let at_once = model(method).replace(
+            "increments = 4",
+            &format!("increments = 1\nmax_iterations = {most}"),
+        );
+        let (force, increments) = force_of(&at_once);
+        println!(
+            "{method}: {increments} increments after cutbacks, normal force {force:.7e} against {stepped:.7e}"
+        );
+        assert!(increments > 1, "{method}: no cutback");
+        // The augmented Lagrangian stops its Uzawa updates once the gaps are within its
+        // tolerance, at a force that depends on the path by as much (2.6·10⁻⁵ measured).
+        let within = if method == "augmented" { 1e-4 } else { 1e-6 };
+        assert!(
+            (force - stepped).abs() < within * stepped,
+            "{method}: {force} against {stepped}"
+        );
+    }
+}
