@@ -206,7 +206,8 @@ pub struct LoadDef {
 pub enum ContactMethod {
     /// Penalty `αP` on penetrating nodes.
     Penalty,
-    /// Lagrange multipliers (one unknown per slave node, primal–dual active set).
+    /// Lagrange multipliers (one unknown per slave node, two with finite sliding for a second
+    /// flank at concave kinks; primal–dual active set).
     Multiplier,
     /// Augmented Lagrangian: penalty plus Uzawa multiplier updates.
     Augmented,

@@ -11,7 +11,7 @@
 //!   with multipliers; no slave node is left inside the base, whichever way Newton starts an
 //!   increment;
 //! * v-groove (examples/v-groove): a wedge pressed into a V-groove, a row of its bottom nodes on
-//!   the valley line; the penalty and the augmented Lagrangian hold them on both flanks.
+//!   the valley line; each method holds them on both flanks.
 
 mod common;
 

@@ -19,9 +19,9 @@
 //! constraint, on that neighbour ([`flank::second_flank`]; see "Concave kinks" below). The node's
 //! terms ([`penalty`], [`multiplier`], [`augmented`]) are scattered to global DOFs `3·node + d`;
 //! multipliers are extra unknowns after the nodal DOFs: per multiplier pair, one per slave node
-//! for its own constraint and, with finite sliding, one more for its second flank (the own ones
-//! first, then the second flanks', slave by slave; `λ = 0` while a node has no second flank or it
-//! is open).
+//! for its own constraint and, with finite sliding, one more for its second flank (slave `j`'s
+//! two at places `j` and `slaves + j` of the pair's, which is which given by
+//! [`state::SecondFlank::traded`]; `λ = 0` while a node has no second flank or it is open).
 //!
 //! Sign conventions (the kernel's): `P > 0` open, `P < 0` penetrating; the constraint enters as
 //! `Π + λP`, compression is `λ ≤ 0`, the contact force on the slave node is `−λW`.
@@ -371,17 +371,21 @@ impl ContactTerms {
     /// Checks the nodes held closed after cycling at a converged state: a node may be held
     /// closed only while it still presses, or pulls by less than the pair's `tolerance`
     /// measured as a gap, `λ/α` (the gap itself with a penalty), and, where some closed node of
-    /// the pair presses, by at most [`HELD_PULL_SHARE`] of the largest push (a force). A larger
-    /// pull means the held status is wrong, and the increment fails (it is cut back) instead of
-    /// ending with a node glued to the master.
+    /// the pair presses, by at most [`HELD_PULL_SHARE`] of the largest push (a force, on either
+    /// of a node's constraints). A larger pull means the held status is wrong, and the increment
+    /// fails (it is cut back) instead of ending with a node glued to the master.
     fn check_held_nodes(&self) -> Result<(), String> {
         for (p, pair) in self.pairs.iter().enumerate() {
             // The largest push of a closed node (held or not), a force.
-            let push = self.trial[p]
-                .iter()
-                .flatten()
-                .filter(|st| st.active)
-                .fold(0.0f64, |m, st| m.max(-st.lambda));
+            let push = self.trial[p].iter().flatten().fold(0.0f64, |m, st| {
+                let own = if st.active { -st.lambda } else { 0.0 };
+                let second = if st.second.active {
+                    -st.second.lambda
+                } else {
+                    0.0
+                };
+                m.max(own).max(second)
+            });
             for (q, pass) in pair.passes.iter().enumerate() {
                 for (j, st) in self.trial[p][q].iter().enumerate() {
                     if !(st.held && st.active) {
@@ -703,10 +707,12 @@ fn second_terms(
     let Some(&(g, fnodes, pair)) = second else {
         st.facet = None;
         st.gap = 0.0;
+        st.normal = [0.0; 3];
         return Ok(());
     };
     st.facet = Some(g);
     st.gap = pair.gap();
+    st.normal = normal_of(&pair);
     let gap = Gap::Finite(pair);
     let (closed, lambda) = if augmented {
         let lambda_hat = augmented::lambda_hat(&gap, st.lambda_k, alpha).map_err(geometry)?;
@@ -788,6 +794,7 @@ fn second_multiplier(
     let lambda = u[ldof];
     st.facet = second.map(|g| g.0);
     st.gap = second.map_or(0.0, |g| g.2.gap());
+    st.normal = second.map_or([0.0; 3], |g| normal_of(&g.2));
     st.active = second.is_some_and(|g| multiplier::wants_active(g.2.gap(), lambda, alpha));
     st.lambda = if st.active { lambda } else { 0.0 };
     let block = match second {
@@ -819,9 +826,16 @@ fn second_multiplier(
     Ok(())
 }
 
+/// The facet normal `W` of a node–facet pair, as stored in the node states.
+fn normal_of(pair: &tricontact::NodeFacet) -> [f64; 3] {
+    let w = pair.facet.normal();
+    [w[0], w[1], w[2]]
+}
+
 /// The multiplier unknowns of `pair` among the extra unknowns: with Lagrange multipliers one per
 /// slave node for its own constraint and, with finite sliding, one more for its second flank
-/// (the own ones first, then the second flanks', slave by slave); none otherwise.
+/// (slave `j`'s at places `j` and `slaves + j`: [`own_unknown`], [`second_unknown`]); none
+/// otherwise.
 fn multipliers(pair: &ContactPair) -> usize {
     match pair.method {
         ContactMethod::Multiplier if pair.small_sliding => pair.passes[0].slaves.len(),
@@ -840,6 +854,31 @@ fn own_unknown(st: &NodeState, j: usize, slaves: usize) -> usize {
 /// The place of the multiplier of slave `j`'s second flank: the other of [`own_unknown`]'s two.
 fn second_unknown(st: &NodeState, j: usize, slaves: usize) -> usize {
     if st.second.traded { j } else { slaves + j }
+}
+
+/// `w` with the components prescribed at `node` zeroed.
+fn free_part(w: &[f64; 3], node: usize, dm: &crate::assembly::DofMap) -> [f64; 3] {
+    std::array::from_fn(|d| {
+        if dm.eq[3 * node + d] == crate::assembly::NO_EQ {
+            0.0
+        } else {
+            w[d]
+        }
+    })
+}
+
+fn dot(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// Gmsh node tags for a message: the first eight, and how many more.
+fn listed(tags: &[u64]) -> String {
+    const LISTED: usize = 8;
+    let shown: Vec<String> = tags.iter().take(LISTED).map(u64::to_string).collect();
+    match tags.len().saturating_sub(LISTED) {
+        0 => shown.join(", "),
+        n => format!("{} and {n} more", shown.join(", ")),
+    }
 }
 
 impl ExtraTerms for ContactTerms {
@@ -1083,44 +1122,51 @@ impl ExtraTerms for ContactTerms {
         scales
     }
 
-    /// Closed multiplier nodes whose normal lies entirely in prescribed components: their
-    /// constraint rows hold master DOFs only, and repeat each other where they share master nodes.
+    /// Closed multiplier nodes whose normal (or second flank's normal) lies entirely in
+    /// prescribed components: their constraint rows hold master DOFs only, and repeat each other
+    /// where they share master nodes; and nodes closed on two flanks whose two normals, in the
+    /// components left free, are parallel: their two rows repeat each other at the node.
     fn singular_cause(&self, dm: &crate::assembly::DofMap) -> Option<String> {
-        const LISTED: usize = 8;
         let mut causes = Vec::new();
         for (pair, states) in self.pairs.iter().zip(&self.trial) {
             if pair.method != ContactMethod::Multiplier {
                 continue;
             }
-            let fixed: Vec<u64> = pair.passes[0]
-                .slaves
-                .iter()
-                .zip(&states[0])
-                .filter(|&(&node, st)| {
-                    let free: f64 = (0..3)
-                        .filter(|&d| dm.eq[3 * node + d] != crate::assembly::NO_EQ)
-                        .map(|d| st.normal[d] * st.normal[d])
-                        .sum();
-                    st.active && free <= 1e-12
-                })
-                .map(|(&node, _)| self.node_tags[node])
-                .collect();
-            if fixed.is_empty() {
-                continue;
+            let (mut fixed, mut parallel) = (Vec::new(), Vec::new());
+            for (&node, st) in pair.passes[0].slaves.iter().zip(&states[0]) {
+                let own = free_part(&st.normal, node, dm);
+                let second = free_part(&st.second.normal, node, dm);
+                let prescribed = |w: &[f64; 3]| dot(w, w) <= 1e-12;
+                if (st.active && prescribed(&own)) || (st.second.active && prescribed(&second)) {
+                    fixed.push(self.node_tags[node]);
+                } else if st.active && st.second.active {
+                    let cos = dot(&own, &second) / (dot(&own, &own) * dot(&second, &second)).sqrt();
+                    if cos.abs() > 1.0 - 1e-6 {
+                        parallel.push(self.node_tags[node]);
+                    }
+                }
             }
-            let shown: Vec<String> = fixed.iter().take(LISTED).map(u64::to_string).collect();
-            let more = match fixed.len().saturating_sub(LISTED) {
-                0 => String::new(),
-                n => format!(" and {n} more"),
-            };
-            causes.push(format!(
-                "contact '{}': {} closed slave node(s) have every normal component prescribed \
-                 (Gmsh nodes {}{more}), so their constraints act on the master nodes alone and \
-                 repeat each other: free those components or use method = \"penalty\"",
-                pair.name,
-                fixed.len(),
-                shown.join(", ")
-            ));
+            if !fixed.is_empty() {
+                causes.push(format!(
+                    "contact '{}': {} closed slave node(s) have every normal component prescribed \
+                     (Gmsh nodes {}), so their constraints act on the master nodes alone and \
+                     repeat each other: free those components or use method = \"penalty\"",
+                    pair.name,
+                    fixed.len(),
+                    listed(&fixed)
+                ));
+            }
+            if !parallel.is_empty() {
+                causes.push(format!(
+                    "contact '{}': {} slave node(s) closed on both flanks of a concave kink of the \
+                     master have the two normals parallel in their free components (Gmsh nodes \
+                     {}), so the two constraints repeat each other there: free those components, \
+                     or use small_sliding = true (one constraint per node) or method = \"penalty\"",
+                    pair.name,
+                    parallel.len(),
+                    listed(&parallel)
+                ));
+            }
         }
         causes.extend(self.repeated_constraints());
         (!causes.is_empty()).then(|| causes.join("; "))

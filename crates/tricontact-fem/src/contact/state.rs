@@ -59,6 +59,8 @@ pub struct SecondFlank {
     pub facet: Option<u32>,
     /// Its gap `P_G` (0 without facet).
     pub gap: f64,
+    /// Its facet normal `W_G` (0 without facet).
+    pub normal: [f64; 3],
     /// Its multiplier (`αP_G` or `λ̂`; ≤ 0 in compression, 0 open).
     pub lambda: f64,
     /// Augmented Lagrangian: its Uzawa estimate.
