@@ -66,6 +66,13 @@ pub trait ExtraTerms: Send {
     fn extra_nodes(&self) -> Vec<Option<usize>> {
         Vec::new()
     }
+    /// For each extra unknown, whether it goes after the other extra unknowns of its node's
+    /// block (an unknown that is mostly inactive, a lone diagonal, such as a node's second
+    /// contact multiplier: between the others it splits the factor's supernodes; see
+    /// [`crate::ordering::equation_order`]). By default none.
+    fn extra_late(&self) -> Vec<bool> {
+        Vec::new()
+    }
     /// For each extra unknown, the factor that makes its equation's residual a force (a gap
     /// constraint: a stiffness) and, inverted, its correction a length: the weights of the
     /// convergence norms, so that they do not depend on the model's units. By default 1.

@@ -405,7 +405,8 @@ impl StepSystem {
         let dm = DofMap::new(&an.active_nodes, &mask, extra.num_extra());
         let adj = node_adjacency(an);
         let pat = Pattern::from_adjacency(&adj, an, &dm);
-        let order = equation_order(&an.mesh.nodes, &adj, &dm, &extra.extra_nodes());
+        let extras = (extra.extra_nodes(), extra.extra_late());
+        let order = equation_order(&an.mesh.nodes, &adj, &dm, (&extras.0, &extras.1));
         let released = (0..an.num_nodal_dofs())
             .filter(|&d| carried.mask.get(d).copied().unwrap_or(false) && !mask[d])
             .map(|d| (d, carried.reactions[d]))

@@ -7,7 +7,8 @@
 //! 64 nodes, which keep their input order. Equations follow their nodes
 //! (free components in order); an extra unknown that belongs to a node (a
 //! contact multiplier, to its slave node) follows the block (leaf or
-//! separator) of that node, the others come last. For 3D meshes this gives
+//! separator) of that node (those marked late, a node's mostly inactive second
+//! multiplier, after the block's others), the others come last. For 3D meshes this gives
 //! far less Cholesky fill than minimum degree.
 //!
 //! A multiplier after its slave node keeps the saddle-point system
@@ -105,25 +106,32 @@ fn dissect(
 /// `owners[k]` is the node extra unknown `k` belongs to: its equation follows
 /// the block (leaf or separator) of that node, or comes last when it has none
 /// (`None`, a node without equations, or `owners` shorter than the extra
-/// unknowns).
+/// unknowns). Within a block, the extras follow their nodes' order, those
+/// marked `late[k]` after all the others (a node's second contact multiplier,
+/// mostly inactive, a lone diagonal: between the others it split the factor's
+/// supernodes).
 #[must_use]
 pub fn equation_order(
     coords: &[[f64; 3]],
     adj: &[Vec<usize>],
     dm: &DofMap,
-    owners: &[Option<usize>],
+    (owners, late): (&[Option<usize>], &[bool]),
 ) -> Vec<usize> {
     let has_eq = |a: usize| (0..3).any(|i| dm.eq[3 * a + i] != NO_EQ);
     let nodes: Vec<usize> = (0..coords.len()).filter(|&a| has_eq(a)).collect();
-    let mut owned: Vec<Vec<usize>> = vec![Vec::new(); coords.len()];
+    // Per node, its extras: those of the block's first run, and the late ones.
+    let mut owned: Vec<[Vec<usize>; 2]> = vec![[Vec::new(), Vec::new()]; coords.len()];
     let mut last = Vec::new();
     for d in dm.n_nodal..dm.eq.len() {
         let e = dm.eq[d];
         if e == NO_EQ {
             continue;
         }
-        match owners.get(d - dm.n_nodal).copied().flatten() {
-            Some(a) if a < coords.len() && has_eq(a) => owned[a].push(e),
+        let k = d - dm.n_nodal;
+        match owners.get(k).copied().flatten() {
+            Some(a) if a < coords.len() && has_eq(a) => {
+                owned[a][usize::from(late.get(k).copied().unwrap_or(false))].push(e);
+            }
             _ => last.push(e),
         }
     }
@@ -135,12 +143,10 @@ pub fn equation_order(
         for &a in nodes {
             perm.extend((0..3).map(|i| dm.eq[3 * a + i]).filter(|&e| e != NO_EQ));
         }
-        // The nodes' first extra unknowns, then their second ones, and so on: a node's second
-        // contact multiplier (a second flank at a concave kink, mostly inactive, a lone
-        // diagonal) between two nodes' first ones split the factor's supernodes.
-        let most = nodes.iter().map(|&a| owned[a].len()).max().unwrap_or(0);
-        for rank in 0..most {
-            perm.extend(nodes.iter().filter_map(|&a| owned[a].get(rank)));
+        for run in 0..2 {
+            for &a in nodes {
+                perm.extend_from_slice(&owned[a][run]);
+            }
         }
         start = end;
     }
@@ -167,7 +173,7 @@ mod tests {
         // that `owners` does not list.
         let owners: Vec<Option<usize>> = (0..n / 10).map(|k| Some(10 * k)).chain([None]).collect();
         let dm = DofMap::new(&vec![true; n], &prescribed, owners.len() + 1);
-        let perm = equation_order(&coords, &adj, &dm, &owners);
+        let perm = equation_order(&coords, &adj, &dm, (&owners, &[]));
         let mut sorted = perm.clone();
         sorted.sort_unstable();
         assert_eq!(sorted, (0..dm.n_eq).collect::<Vec<_>>());
@@ -187,18 +193,18 @@ mod tests {
         let last: Vec<usize> = [15, 30, 31].iter().map(|&k| extra(k)).collect();
         assert_eq!(&perm[perm.len() - 3..], &last[..]);
         // Nothing owned: all extras last.
-        let plain = equation_order(&coords, &adj, &dm, &[]);
+        let plain = equation_order(&coords, &adj, &dm, (&[], &[]));
         let all: Vec<usize> = (0..=31).map(extra).collect();
         assert_eq!(&plain[plain.len() - 32..], &all[..]);
     }
 
-    /// Two extra unknowns per node (a contact multiplier and a second one for a second flank):
-    /// in each block the nodes' first extras, in the nodes' order, then their second ones, so
-    /// that the mostly inactive second ones (a lone diagonal) do not split the first ones'
-    /// supernodes (measured: `fem-bench --contact 80` took 22.6 s with each node's two together,
-    /// 9.4 s so, 9.1 s with one extra per node).
+    /// Two extra unknowns per node (a contact multiplier and a second one for a second flank),
+    /// the second ones marked late: in each block the nodes' first extras, in the nodes' order,
+    /// then their second ones, so that the mostly inactive second ones (a lone diagonal) do not
+    /// split the first ones' supernodes (measured: `fem-bench --contact 80` took 22.6 s with
+    /// each node's two together, 9.4 s so, 9.1 s with one extra per node).
     #[test]
-    fn a_blocks_second_extras_follow_all_its_first_ones() {
+    fn a_blocks_late_extras_follow_all_its_others() {
         let n = 300;
         let coords: Vec<[f64; 3]> = (0..n).map(|k| [k as f64, 0.0, 0.0]).collect();
         let adj: Vec<Vec<usize>> = (0..n)
@@ -206,8 +212,9 @@ mod tests {
             .collect();
         // Every node owns extra `a` and extra `n + a`.
         let owners: Vec<Option<usize>> = (0..2 * n).map(|k| Some(k % n)).collect();
+        let late: Vec<bool> = (0..2 * n).map(|k| k >= n).collect();
         let dm = DofMap::new(&vec![true; n], &vec![false; 3 * n], owners.len());
-        let perm = equation_order(&coords, &adj, &dm, &owners);
+        let perm = equation_order(&coords, &adj, &dm, (&owners, &late));
         let extra = |k: usize| dm.eq[3 * n + k];
         let is_node = |e: usize| e < 3 * n;
         // Runs of extras between blocks of node equations: the first extras of the run's
@@ -235,6 +242,12 @@ mod tests {
             k = end;
         }
         assert!(runs > 1, "{runs} blocks");
+        // None marked late: each node's extras together, in their order.
+        let together = equation_order(&coords, &adj, &dm, (&owners, &[]));
+        let at = |e: usize| together.iter().position(|&p| p == e).expect("ordered");
+        for a in 0..n {
+            assert_eq!(at(extra(a)) + 1, at(extra(n + a)), "node {a}");
+        }
     }
 
     #[test]

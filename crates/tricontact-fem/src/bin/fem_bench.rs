@@ -342,7 +342,7 @@ fn solve_cube(an: &Analysis, n: usize, amd: bool, setup: std::time::Duration) {
     let t = Instant::now();
     let adj = node_adjacency(an);
     let pat = Pattern::from_adjacency(&adj, an, &dm);
-    let order = (!amd).then(|| equation_order(&an.mesh.nodes, &adj, &dm, &[]));
+    let order = (!amd).then(|| equation_order(&an.mesh.nodes, &adj, &dm, (&[], &[])));
     drop(adj);
     let t_pattern = t.elapsed();
     let u = vec![0.0; an.num_nodal_dofs()];

@@ -897,6 +897,19 @@ impl ExtraTerms for ContactTerms {
         owners
     }
 
+    /// The unknowns of the second flanks' places (mostly inactive) after their blocks' other
+    /// multipliers (after a trade such a place holds the own constraint's: only the speed differs).
+    fn extra_late(&self) -> Vec<bool> {
+        let mut late = vec![false; self.n_extra];
+        for (p, &offset) in self.pairs.iter().zip(&self.offsets) {
+            let slaves = p.passes[0].slaves.len();
+            for k in slaves..multipliers(p) {
+                late[offset + k] = true;
+            }
+        }
+        late
+    }
+
     fn symmetric(&self) -> bool {
         true
     }
