@@ -755,10 +755,21 @@ fn multiplier_node(
         Some((_, _, g)) if act => multiplier::active_block(g, lambda).map_err(geometry)?,
         _ => multiplier::inactive_block(lambda, alpha),
     };
-    if let Some((_, fnodes, _)) = eval
-        && act
-    {
-        let nodes = [fnodes[0], fnodes[1], fnodes[2], s];
+    let nodes = eval.filter(|_| act).map(|(_, f, _)| [f[0], f[1], f[2], s]);
+    scatter_multiplier(&block, nodes, ldof, (residual, force, triplets));
+    Ok(())
+}
+
+/// Scatters a node's multiplier block into `out`: its multiplier's equation (row and column
+/// `ldof`) and, where active (`nodes`: the facet's three and the slave node), the coupling and
+/// the geometric stiffness over their DOFs.
+fn scatter_multiplier(
+    block: &multiplier::Block,
+    nodes: Option<[usize; 4]>,
+    ldof: usize,
+    (residual, force, triplets): Out<'_>,
+) {
+    if let Some(nodes) = nodes {
         scatter(
             nodes,
             &block.residual_u,
@@ -775,7 +786,6 @@ fn multiplier_node(
     }
     residual[ldof] += block.residual_lambda;
     triplets.push((ldof, ldof, block.k_lambdalambda));
-    Ok(())
 }
 
 /// The second constraint of slave node `s` with Lagrange multipliers, its multiplier the unknown
@@ -789,7 +799,7 @@ fn second_multiplier(
     alpha: f64,
     (s, ldof): (usize, usize),
     u: &[f64],
-    (residual, force, triplets): Out<'_>,
+    out: Out<'_>,
 ) -> Result<(), String> {
     let lambda = u[ldof];
     st.facet = second.map(|g| g.0);
@@ -803,26 +813,10 @@ fn second_multiplier(
         }
         _ => multiplier::inactive_block(lambda, alpha),
     };
-    if let Some(&(_, fnodes, _)) = second
-        && st.active
-    {
-        let nodes = [fnodes[0], fnodes[1], fnodes[2], s];
-        scatter(
-            nodes,
-            &block.residual_u,
-            &block.k_uu,
-            residual,
-            force,
-            triplets,
-        );
-        for i in 0..12 {
-            let d = 3 * nodes[i / 3] + i % 3;
-            triplets.push((d, ldof, block.k_ulambda[i]));
-            triplets.push((ldof, d, block.k_ulambda[i]));
-        }
-    }
-    residual[ldof] += block.residual_lambda;
-    triplets.push((ldof, ldof, block.k_lambdalambda));
+    let nodes = second
+        .filter(|_| st.active)
+        .map(|&(_, f, _)| [f[0], f[1], f[2], s]);
+    scatter_multiplier(&block, nodes, ldof, out);
     Ok(())
 }
 
