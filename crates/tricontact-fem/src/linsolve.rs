@@ -14,8 +14,8 @@
 //! displacements it constrains there come first, its `LDLᵀ` pivot is a (negative) Schur
 //! complement `−bᵀK̃⁻¹b` and no pivoting is needed (also for a node's two multipliers at a
 //! concave kink, while their rows are independent; where they repeat each other, LU takes
-//! over, or the system is singular and the contact layer names the nodes). The symbolic analysis (fill-reducing
-//! ordering, elimination tree) is kept and reused while the pattern is
+//! over, or the system is singular and the contact layer names the nodes). The symbolic
+//! analysis (fill-reducing ordering, elimination tree) is kept and reused while the pattern is
 //! unchanged, and so is the memory of the numeric factorizations: a factor given back
 //! ([`LinearSolver::recycle`]) lends its values to the next one, and the scratch space is kept. A
 //! failed LU, or a non-finite solution, is reported as a singular system.

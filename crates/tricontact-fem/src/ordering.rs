@@ -202,7 +202,7 @@ mod tests {
     /// the second ones marked late: in each block the nodes' first extras, in the nodes' order,
     /// then their second ones, so that the mostly inactive second ones (a lone diagonal) do not
     /// split the first ones' supernodes (measured: `fem-bench --contact 80` took 22.6 s with
-    /// each node's two together, 9.4 s so, 9.1 s with one extra per node).
+    /// each node's two together, 9.2–9.6 s so, 9.5–9.9 s with one extra per node).
     #[test]
     fn a_blocks_late_extras_follow_all_its_others() {
         let n = 300;
