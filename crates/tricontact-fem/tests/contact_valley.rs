@@ -178,3 +178,35 @@ fn two_passes_hold_the_valley_nodes_on_both_flanks_too() {
         );
     }
 }
+
+/// Multipliers against a fixed base, the wedge's bottom nodes free only along `y` and `z`: at a
+/// valley node the two flanks' normals agree in those components, so its two constraints
+/// repeat each other and the system is singular. The run fails naming those nodes and the way
+/// out; with `small_sliding` (one constraint per node) the same model converges.
+#[test]
+fn parallel_flanks_in_the_free_components_are_named_as_the_cause() {
+    let mesh = common::v_groove([16, 4, 4], [8, 3, 3], ElementKind::Hex8);
+    let fixed = model("multiplier")
+        .replace("group = \"lower_zmin\"", "group = \"lower_solid\"")
+        .replace(
+            "[[contact]]",
+            "[[boundary]]\ngroup = \"upper_zmin\"\nfix = [\"x\"]\n[[contact]]",
+        );
+    let an = common::analysis(mesh.clone(), &fixed);
+    let mut terms = ContactTerms::new(&an);
+    let err = tricontact_fem::driver::run(&an, &mut terms, &mut |_| Ok(()))
+        .expect_err("singular")
+        .to_string();
+    assert!(
+        err.contains("closed on both flanks of a concave kink")
+            && err.contains("parallel in their free components")
+            && err.contains("small_sliding = true"),
+        "{err}"
+    );
+    let small = fixed.replace(
+        "method = \"multiplier\"",
+        "method = \"multiplier\"\nsmall_sliding = true",
+    );
+    let (_, records, _) = common::solve_contact(&common::analysis(mesh, &small));
+    assert_eq!(records.last().expect("increments").load_factor, 1.0);
+}
