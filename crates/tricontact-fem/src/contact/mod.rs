@@ -71,9 +71,9 @@
 //!   ([`state::SecondFlank`]): with the augmented Lagrangian it has its own multiplier estimate
 //!   (the Uzawa update and the gap check take it too), with multipliers its own unknown (its
 //!   switch, like the penalty's and the augmented Lagrangian's status for it, decided afresh at
-//!   each iteration), and the two estimates or unknowns trade places when the node's facet and
-//!   its second flank do (for the unknowns, [`state::SecondFlank::traded`] says which is
-//!   which). One second constraint at most: in a corner of three concave planes the third is
+//!   each iteration), and the two estimates or unknowns, and their statuses, trade places when
+//!   the node's facet and its second flank do (for the unknowns, [`state::SecondFlank::traded`]
+//!   says which is which). One second constraint at most: in a corner of three concave planes the third is
 //!   measured, not held. `examples/v-groove` (a wedge pressed into a V-groove, a row of its
 //!   bottom nodes on the valley line): with one constraint per node its valley nodes cycled
 //!   between the flanks, the penalty and the augmented Lagrangian failed at 75 % of the press,
@@ -983,12 +983,14 @@ impl ExtraTerms for ContactTerms {
                     };
                     let st = &mut self.trial[p][q][j];
                     // The own facet and the second flank trading places (a node crossing a
-                    // valley line): each multiplier (estimate or unknown) stays with its facet.
+                    // valley line): each multiplier (estimate or unknown) and each status stays
+                    // with its facet (the own status's change is counted against its facet's).
                     if let (Some((f, _, _)), Some((g, _, _))) = (&eval, &second)
                         && st.facet == Some(*g)
                         && st.second.facet == Some(*f)
                     {
                         std::mem::swap(&mut st.lambda_k, &mut st.second.lambda_k);
+                        std::mem::swap(&mut st.active, &mut st.second.active);
                         st.second.traded = !st.second.traded;
                     }
                     let was_active = st.active;
@@ -1266,7 +1268,7 @@ mod tests {
 
     /// A node of the V-groove example's valley row moved just below the valley line, to one side
     /// and then to the other: its own facet and its second flank trade places, and so do their
-    /// augmented-Lagrangian multiplier estimates.
+    /// augmented-Lagrangian multiplier estimates and their statuses.
     #[test]
     fn the_estimates_trade_places_when_the_facet_and_the_second_flank_do() {
         let (mut terms, mut u, j) = valley_node("v-groove/augmented.toml");
@@ -1277,9 +1279,15 @@ mod tests {
         );
         terms.trial[0][0][j].lambda_k = -1.0;
         terms.trial[0][0][j].second.lambda_k = -2.0;
+        // The statuses follow their facets too: the flank, open, becomes the node's facet and
+        // closes, a change of its status, counted as one.
+        let st = &mut terms.trial[0][0][j];
+        (st.active, st.second.active, st.switches) = (true, false, 0);
         assert_eq!(across(&mut terms, &mut u, j, 1.0), (second, own));
         let st = &terms.trial[0][0][j];
         assert_eq!((st.lambda_k, st.second.lambda_k), (-2.0, -1.0));
+        assert!(st.active && st.second.active);
+        assert_eq!(st.switches, 1);
     }
 
     /// The same with Lagrange multipliers: the node's two multiplier unknowns stay with their
