@@ -73,12 +73,12 @@
 //!   switch, like the penalty's and the augmented Lagrangian's status for it, decided afresh at
 //!   each iteration), and the two estimates or unknowns, and their statuses, trade places when
 //!   the node's facet and its second flank do (for the unknowns, [`state::SecondFlank::traded`]
-//!   says which is which). One second constraint at most: in a corner of three concave planes the third is
-//!   measured, not held. `examples/v-groove` (a wedge pressed into a V-groove, a row of its
-//!   bottom nodes on the valley line): with one constraint per node its valley nodes cycled
-//!   between the flanks, the penalty and the augmented Lagrangian failed at 75 % of the press,
-//!   and the multipliers left them 7.8·10⁻³ behind the other flank; now 4 increments, 17, 29 and
-//!   10 iterations, the multipliers' nodes behind neither (2.6·10⁻¹⁵). Only kinks of at least
+//!   says which is which). One second constraint at most: in a corner of three concave planes
+//!   the third is measured, not held. `examples/v-groove` (a wedge pressed into a V-groove, a
+//!   row of its bottom nodes on the valley line): with one constraint per node its valley nodes
+//!   cycled between the flanks, the penalty and the augmented Lagrangian failed at 75 % of the
+//!   press, and the multipliers left them 7.8·10⁻³ behind the other flank; now 4 increments, 17,
+//!   29 and 10 iterations, the multipliers' nodes behind neither (2.6·10⁻¹⁵). Only kinks of at least
 //!   [`flank::ENFORCED_KINK_DEGREES`] count: an earlier trial took every concave neighbour the
 //!   node was behind, and runs that converge failed (`sliding` pressed 0.1 with a penalty, in its
 //!   press at 0° and in its slide at 5°; `sliding` as given 213 → 281 iterations and
