@@ -704,15 +704,10 @@ fn second_terms(
 ) -> Result<(), String> {
     st.active = false;
     st.lambda = 0.0;
-    let Some(&(g, fnodes, pair)) = second else {
-        st.facet = None;
-        st.gap = 0.0;
-        st.normal = [0.0; 3];
+    follow_flank(st, second);
+    let Some(&(_, fnodes, pair)) = second else {
         return Ok(());
     };
-    st.facet = Some(g);
-    st.gap = pair.gap();
-    st.normal = normal_of(&pair);
     let gap = Gap::Finite(pair);
     let (closed, lambda) = if augmented {
         let lambda_hat = augmented::lambda_hat(&gap, st.lambda_k, alpha).map_err(geometry)?;
@@ -802,9 +797,7 @@ fn second_multiplier(
     out: Out<'_>,
 ) -> Result<(), String> {
     let lambda = u[ldof];
-    st.facet = second.map(|g| g.0);
-    st.gap = second.map_or(0.0, |g| g.2.gap());
-    st.normal = second.map_or([0.0; 3], |g| normal_of(&g.2));
+    follow_flank(st, second);
     st.active = second.is_some_and(|g| multiplier::wants_active(g.2.gap(), lambda, alpha));
     st.lambda = if st.active { lambda } else { 0.0 };
     let block = match second {
@@ -820,10 +813,18 @@ fn second_multiplier(
     Ok(())
 }
 
-/// The facet normal `W` of a node–facet pair, as stored in the node states.
-fn normal_of(pair: &tricontact::NodeFacet) -> [f64; 3] {
-    let w = pair.facet.normal();
-    [w[0], w[1], w[2]]
+/// Records the second flank of this evaluation (`second`: its facet, its nodes and the pair;
+/// `None`, the node has none) in the node's state: its facet, gap and normal (`None`, 0 and 0).
+fn follow_flank(
+    st: &mut state::SecondFlank,
+    second: Option<&(u32, [usize; 3], tricontact::NodeFacet)>,
+) {
+    st.facet = second.map(|g| g.0);
+    st.gap = second.map_or(0.0, |g| g.2.gap());
+    st.normal = second.map_or([0.0; 3], |g| {
+        let w = g.2.facet.normal();
+        [w[0], w[1], w[2]]
+    });
 }
 
 /// The multiplier unknowns of `pair` among the extra unknowns: with Lagrange multipliers one per

@@ -52,7 +52,8 @@ impl NodeState {
 }
 
 /// The state of a node's second constraint ([`super::flank::second_flank`]) at the last
-/// evaluation: as the node's own, with a multiplier estimate of its own.
+/// evaluation: as the node's own, with a multiplier estimate (augmented Lagrangian) or a
+/// multiplier unknown (Lagrange multipliers) of its own.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SecondFlank {
     /// The flank's facet, `None` when the node has none.
