@@ -1,7 +1,7 @@
 //! The contact layer's facet choice at edges and vertices, sliding, convex and concave edges, and
 //! the assembled penalty terms against finite differences.
 
-use tricontact::contact::{Constraint, assemble_penalty, choose_facet};
+use tricontact::contact::{Constraint, assemble_penalty, choose_facet, choose_facet_facing};
 use tricontact::search::scenes::grid;
 use tricontact::search::{Bvh, Surface};
 use tricontact::{GeometryError, Vec3, penalty};
@@ -275,6 +275,18 @@ fn choose_among_all(
     slave: u32,
     radius: f64,
 ) -> Option<(u32, f64)> {
+    choose_facing_among_all(surface, bvh, positions, (slave, None), radius)
+}
+
+/// [`choose_among_all`] among the facets whose normal `W` is within 60° of `−n`, when `n` is
+/// given.
+fn choose_facing_among_all(
+    surface: &Surface,
+    bvh: &Bvh,
+    positions: &[Vec3],
+    (slave, facing): (u32, Option<Vec3>),
+    radius: f64,
+) -> Option<(u32, f64)> {
     let x = positions[slave as usize];
     let query = tricontact::search::Query {
         point: x,
@@ -290,6 +302,9 @@ fn choose_among_all(
             .projection
             .is_inside(tricontact::contact::PROJECTION_TOLERANCE)
         {
+            continue;
+        }
+        if facing.is_some_and(|n| pair.facet.normal().dot(&n.normalize()) >= -0.5) {
             continue;
         }
         let g = pair.gap();
@@ -424,5 +439,87 @@ fn the_growing_reach_chooses_what_all_facets_within_the_radius_choose() {
     assert!(
         compared > 3000 && beyond_nearest > 100 && none > 100,
         "{compared} compared, {beyond_nearest} beyond their closest facet, {none} with none"
+    );
+}
+
+/// Area-weighted normals at the nodes of `facets` (zero at a node of none).
+fn node_normals(nodes: &[Vec3], facets: &[[u32; 3]]) -> Vec<Vec3> {
+    let mut normals = vec![Vec3::zeros(); nodes.len()];
+    for f in facets {
+        let [a, b, c] = f.map(|v| nodes[v as usize]);
+        let w = (b - a).cross(&(c - a));
+        for &v in f {
+            normals[v as usize] += w;
+        }
+    }
+    normals
+}
+
+/// Self-contact: among the facets facing the node's own surface, the search chooses what the rule
+/// chooses among all facets within the radius, bit for bit: the nodes of a torus and of two plates
+/// facing each other (one surface), and points off them, with their surfaces' normals (or, off
+/// the surface, random directions). The normal must matter: for many nodes the rule without it
+/// chooses a facet of the node's own side (behind which a node of the torus's convex outer side
+/// lies), and the facing rule another facet or none.
+#[test]
+fn self_contact_chooses_among_the_facing_facets_as_the_rule_does() {
+    let mut r = tricontact::search::scenes::uniform(29);
+    let (torus_nodes, torus_facets) = tricontact::search::scenes::torus(24, 12, 2.0, 0.6);
+    // Two plates 0.3 apart, facing each other: the lower one's normal up, the upper one's down.
+    let (mut plates, mut plate_facets) = grid(6, 1.0);
+    let (upper, upper_facets) = grid(8, 0.8);
+    let shift = u32::try_from(plates.len()).unwrap();
+    plates.extend(upper.iter().map(|p| p + Vec3::new(-0.5, -0.3, 0.3)));
+    plate_facets.extend(
+        upper_facets
+            .iter()
+            .map(|f| [f[0], f[2], f[1]].map(|v| v + shift)),
+    );
+    let (mut compared, mut differ, mut found) = (0, 0, 0);
+    for (nodes, facets) in [(torus_nodes, torus_facets), (plates, plate_facets)] {
+        let longest = facets
+            .iter()
+            .flat_map(|f| {
+                (0..3).map(|e| (nodes[f[e] as usize] - nodes[f[(e + 1) % 3] as usize]).norm())
+            })
+            .fold(0.0, f64::max);
+        let mut all = nodes.clone();
+        // Points near the surface's nodes, off it.
+        all.extend(
+            nodes
+                .iter()
+                .step_by(3)
+                .map(|p| p + Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5) * longest),
+        );
+        let mut normals = node_normals(&all, &facets);
+        for n in &mut normals[nodes.len()..] {
+            *n = Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5);
+        }
+        let surface = Surface::new(facets.clone(), all.len()).unwrap();
+        let bvh = Bvh::build(&surface, &all, 0.0).unwrap();
+        for (slave, &n) in normals.iter().enumerate() {
+            let slave = u32::try_from(slave).unwrap();
+            let got = choose_facet_facing(&surface, &bvh, &all, slave, longest, n);
+            let want = choose_facing_among_all(&surface, &bvh, &all, (slave, Some(n)), longest);
+            assert_eq!(
+                got.map(|(f, p)| (f, p.gap().to_bits())),
+                want.map(|(f, g)| (f, g.to_bits())),
+                "slave {slave} at {:?}, facing {n:?}",
+                all[slave as usize]
+            );
+            compared += 1;
+            found += usize::from(got.is_some());
+            let plain = choose_facet(&surface, &bvh, &all, slave, longest).map(|(f, _)| f);
+            differ += usize::from(plain != got.map(|(f, _)| f));
+        }
+        // A zero normal faces nothing.
+        assert_eq!(
+            choose_facet_facing(&surface, &bvh, &all, 0, longest, Vec3::zeros()).map(|(f, _)| f),
+            None
+        );
+    }
+    assert!(
+        compared > 500 && differ > 40 && found > 100,
+        "{compared} compared, {differ} differ from the rule without normals, {found} found a facet"
     );
 }

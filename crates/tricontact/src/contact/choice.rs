@@ -32,6 +32,21 @@
 //!
 //! The rule assumes penetrations small compared with the facet size, as contact enforcement keeps
 //! them.
+//!
+//! # Self-contact: facing facets only
+//! When the slave nodes lie on the master surface itself (one surface in contact with itself, or
+//! several bodies' surfaces named as one), [`choose_facet_facing`] also takes the outward normal
+//! `n` of the node's own surface and keeps only the facets that face it ([`faces`]):
+//! `W·n̂ < −cos 60°`, within 60° of opposite. The facets around the node are excluded anyway;
+//! this leaves out the rest of its own side of the surface, which a node near a bend of that side
+//! can lie behind and project into (next to a box's edge, a node of one face projects onto the
+//! edge of the face beyond, an element behind its plane), while two parts of the surface that
+//! come into contact face each other (`W·n̂` near `−1`; a node on a box's edge or corner, whose
+//! normal is the mean of its faces', meets a face square to one of them at `W·n̂ = −0.71` or
+//! `−0.58`). A bound of zero (any facet turned away at all) would take or leave a face square to
+//! the node's own from the round-off of a few millionths of a turn. The rule is otherwise the
+//! same, and so is the search (a candidate left out by the normal is left out whatever the
+//! reach).
 
 use crate::linalg::Vec3;
 use crate::node_facet::NodeFacet;
@@ -40,6 +55,18 @@ use crate::search::{Bvh, Query, Surface};
 /// Tolerance on the barycentric coordinates for "the node projects into the facet": a node on a
 /// shared edge or vertex projects into every facet sharing it despite round-off.
 pub const PROJECTION_TOLERANCE: f64 = 1e-9;
+
+/// A facet faces a node's own surface when its normal is within the angle whose cosine this is
+/// of the opposite of the node's normal (60°): see [`faces`].
+pub const FACING_COSINE: f64 = 0.5;
+
+/// `true` when a facet of unit normal `w` faces a surface whose outward normal is `n` (of any
+/// length): `w·n < −FACING_COSINE |n|`. `false` for a zero or non-finite `n`.
+#[must_use]
+#[inline]
+pub fn faces(w: &Vec3, n: &Vec3) -> bool {
+    w.dot(n) < -FACING_COSINE * n.norm()
+}
 
 /// Relative margin of the search's certificate (see [`choose_facet`]), on the extent of the master
 /// surface and the magnitude of the coordinates.
@@ -74,6 +101,36 @@ pub fn choose_facet(
     slave: u32,
     radius: f64,
 ) -> Option<(u32, NodeFacet)> {
+    choose(surface, bvh, positions, (slave, None), radius)
+}
+
+/// [`choose_facet`] among the facets that face the slave node's own surface, whose outward normal
+/// at the node is `facing`: those that face it, [`faces`] (self-contact: see the module
+/// documentation). `facing` need not be of unit length; a zero or non-finite one faces
+/// nothing, and the node gets `None`.
+///
+/// # Panics
+/// As [`choose_facet`].
+#[must_use]
+pub fn choose_facet_facing(
+    surface: &Surface,
+    bvh: &Bvh,
+    positions: &[Vec3],
+    slave: u32,
+    radius: f64,
+    facing: Vec3,
+) -> Option<(u32, NodeFacet)> {
+    choose(surface, bvh, positions, (slave, Some(facing)), radius)
+}
+
+/// [`choose_facet`], among the facets facing `facing` when it is given.
+fn choose(
+    surface: &Surface,
+    bvh: &Bvh,
+    positions: &[Vec3],
+    (slave, facing): (u32, Option<Vec3>),
+    radius: f64,
+) -> Option<(u32, NodeFacet)> {
     let Some(&x) = positions.get(slave as usize) else {
         panic!(
             "slave node {slave} has no position: {} node positions were given",
@@ -85,14 +142,14 @@ pub fn choose_facet(
         exclude: Some(slave),
     };
     if !(radius.is_finite() && radius > 0.0) {
-        return best_within(surface, bvh, positions, &query, radius);
+        return best_within(surface, bvh, positions, (&query, facing), radius);
     }
     let nearest = bvh.closest(surface, &query, radius)?;
     let margin = MARGIN * (bvh.extent() + x.amax() + nearest.closest.point.amax());
     let mut reach = nearest.closest.distance + 2.0 * margin;
     loop {
         reach = reach.min(radius);
-        let best = best_within(surface, bvh, positions, &query, reach);
+        let best = best_within(surface, bvh, positions, (&query, facing), reach);
         let certified = best
             .as_ref()
             .is_some_and(|(_, pair)| pair.gap().abs() <= reach - margin);
@@ -103,13 +160,13 @@ pub fn choose_facet(
     }
 }
 
-/// The rule over the facets within `reach` of the query: those the node projects into, the
-/// smallest `|P|`, ties to the lowest facet index.
+/// The rule over the facets within `reach` of the query: those the node projects into (and that
+/// face `facing`, when given), the smallest `|P|`, ties to the lowest facet index.
 fn best_within(
     surface: &Surface,
     bvh: &Bvh,
     positions: &[Vec3],
-    query: &Query,
+    (query, facing): (&Query, Option<Vec3>),
     reach: f64,
 ) -> Option<(u32, NodeFacet)> {
     let mut best: Option<(u32, NodeFacet)> = None;
@@ -119,6 +176,9 @@ fn best_within(
             continue;
         };
         if !pair.projection.is_inside(PROJECTION_TOLERANCE) {
+            continue;
+        }
+        if facing.is_some_and(|n| !faces(&pair.facet.normal(), &n)) {
             continue;
         }
         let better = best.as_ref().is_none_or(|(f, p)| {

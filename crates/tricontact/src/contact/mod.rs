@@ -12,7 +12,7 @@ pub mod choice;
 pub mod enforcement;
 
 pub use assembly::{Constraint, PenaltyAssembly, assemble_penalty};
-pub use choice::{PROJECTION_TOLERANCE, choose_facet};
+pub use choice::{FACING_COSINE, PROJECTION_TOLERANCE, choose_facet, choose_facet_facing, faces};
 pub use enforcement::{
     AugmentedTerms, MultiplierBlock, augmented, augmented_closed, lambda_hat, multiplier_block,
     wants_active,
