@@ -237,7 +237,7 @@ impl std::fmt::Display for ContactMethod {
 pub struct ContactDef {
     /// Surface or node group: its nodes are the slave nodes.
     pub slave: String,
-    /// Surface group: its faces are the master facets.
+    /// Surface group: its faces are the master facets (the slave group itself for self-contact).
     pub master: String,
     /// Enforcement method.
     pub method: ContactMethod,
@@ -257,6 +257,15 @@ pub struct ContactDef {
     /// the increment.
     #[serde(default)]
     pub small_sliding: bool,
+}
+
+impl ContactDef {
+    /// `true` for the contact of a surface group with itself (slave = master; see
+    /// [`crate::contact::pair`], "Self-contact").
+    #[must_use]
+    pub fn is_self_contact(&self) -> bool {
+        self.slave == self.master
+    }
 }
 
 fn default_contact_tolerance() -> f64 {

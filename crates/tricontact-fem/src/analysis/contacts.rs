@@ -38,13 +38,6 @@ pub(super) fn resolve(
     };
     for (i, c) in model.contacts.iter().enumerate() {
         let name = format!("{}-{}", c.slave, c.master);
-        if c.slave == c.master {
-            problems.push(invalid(format!(
-                "{}contact '{name}': slave and master are the same group (self-contact is not supported)",
-                src.at("contact", i, "master")
-            )));
-            continue;
-        }
         if model.contacts[..i]
             .iter()
             .any(|d| d.slave == c.slave && d.master == c.master)

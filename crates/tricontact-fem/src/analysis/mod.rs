@@ -316,16 +316,8 @@ impl Analysis {
                 let Ok(bvh) = tricontact::search::Bvh::build(&pass.surface, &x, pass.radius) else {
                     continue;
                 };
-                for &s in &pass.slaves {
-                    let Some((f, nf)) = u32::try_from(s).ok().and_then(|node| {
-                        tricontact::contact::choose_facet(
-                            &pass.surface,
-                            &bvh,
-                            &x,
-                            node,
-                            pass.radius,
-                        )
-                    }) else {
+                for (j, &s) in pass.slaves.iter().enumerate() {
+                    let Some((f, nf)) = pass.choose(&bvh, &x, j) else {
                         continue;
                     };
                     let w = nf.facet.normal();

@@ -76,13 +76,14 @@ fn concave(x: &[Vec3], f: (&NodeFacet, &[u32; 3]), g: (&NodeFacet, &[u32; 3])) -
 /// The facets `G` concave to node `s`'s facet `facet` near it (within twice `facet`'s longest
 /// edge plus the node's gap, and within `radius`), with the node's pair on each and the cosine
 /// of the kink (`W_F·W_G`), at positions `x` (`bvh` built on them). Facets containing the node
-/// are left out (self-contact).
+/// are left out (self-contact), and, with self-contact (`facing` the outward normal of the node's
+/// own surface), those that do not face it ([`tricontact::contact::faces`]).
 fn concave_neighbours<'a>(
     surface: &'a Surface,
     bvh: &'a Bvh,
     x: &'a [Vec3],
     (s, facet): (usize, u32),
-    radius: f64,
+    (radius, facing): (f64, Option<Vec3>),
 ) -> impl Iterator<Item = (u32, NodeFacet, f64)> + 'a {
     let pair_with = move |f: u32| {
         let [a, b, c] = surface.corners(f, x);
@@ -104,6 +105,9 @@ fn concave_neighbours<'a>(
             return None;
         }
         let g_pair = pair_with(g)?;
+        if facing.is_some_and(|n| !tricontact::contact::faces(&g_pair.facet.normal(), &n)) {
+            return None;
+        }
         let g_nodes = surface.facets()[g as usize];
         concave(x, (f_pair, f_nodes), (&g_pair, &g_nodes))
             .then(|| (g, g_pair, f_pair.facet.normal().dot(&g_pair.facet.normal())))
@@ -136,13 +140,14 @@ pub fn second_flank(
     bvh: &Bvh,
     x: &[Vec3],
     (s, facet): (usize, u32),
-    (radius, hysteresis): (f64, Hysteresis),
+    (radius, hysteresis, facing): (f64, Hysteresis, Option<Vec3>),
 ) -> Option<(u32, NodeFacet)> {
     let cos_kink = ENFORCED_KINK_DEGREES.to_radians().cos();
-    let candidates: Vec<(u32, NodeFacet)> = concave_neighbours(surface, bvh, x, (s, facet), radius)
-        .filter(|(_, pair, cos)| *cos <= cos_kink && pair.projection.is_inside(LOST_TOLERANCE))
-        .map(|(g, pair, _)| (g, pair))
-        .collect();
+    let candidates: Vec<(u32, NodeFacet)> =
+        concave_neighbours(surface, bvh, x, (s, facet), (radius, facing))
+            .filter(|(_, pair, cos)| *cos <= cos_kink && pair.projection.is_inside(LOST_TOLERANCE))
+            .map(|(g, pair, _)| (g, pair))
+            .collect();
     let smallest = candidates
         .iter()
         .map(|(_, pair)| pair.gap())
@@ -169,16 +174,17 @@ pub fn second_flank(
 /// The largest `−P_G` over the facets `G` near node `s` (within twice `facet`'s size plus the
 /// node's gap, and within `radius`), concave to `facet`, that the node lies behind with its foot
 /// within [`LOST_TOLERANCE`] of `G`, at positions `x` (`bvh` built on them); `0` when there is
-/// none.
+/// none. With self-contact (`facing` the outward normal of the node's own surface), only facets
+/// that face it count.
 #[must_use]
 pub fn flank_penetration(
     surface: &Surface,
     bvh: &Bvh,
     x: &[Vec3],
     (s, facet): (usize, u32),
-    radius: f64,
+    (radius, facing): (f64, Option<Vec3>),
 ) -> f64 {
-    concave_neighbours(surface, bvh, x, (s, facet), radius)
+    concave_neighbours(surface, bvh, x, (s, facet), (radius, facing))
         .filter(|(_, pair, _)| pair.gap() < 0.0 && pair.projection.is_inside(LOST_TOLERANCE))
         .fold(0.0f64, |deepest, (_, pair, _)| deepest.max(-pair.gap()))
 }
@@ -206,7 +212,7 @@ mod tests {
         let s = x.len() - 1;
         let surface = Surface::new(facets, x.len()).expect("surface");
         let bvh = Bvh::build(&surface, &x, 1.0).expect("tree");
-        flank_penetration(&surface, &bvh, &x, (s, f), 1.0)
+        flank_penetration(&surface, &bvh, &x, (s, f), (1.0, None))
     }
 
     #[test]
@@ -231,7 +237,7 @@ mod tests {
             previous: None,
             tolerance: 0.0,
         };
-        second_flank(&surface, &bvh, &x, (s, f), (1.0, none)).map(|(g, pair)| {
+        second_flank(&surface, &bvh, &x, (s, f), (1.0, none, None)).map(|(g, pair)| {
             let [a, b, c] = surface.corners(g, &x);
             let direct = NodeFacet::new(a, b, c, node).expect("pair");
             assert_eq!(pair.gap(), direct.gap());

@@ -7,7 +7,8 @@
 //! origin. For every pair and
 //! pass, the master surface's tree is built at `x` and each slave node gets **one** constraint: the
 //! facet of [`tricontact::contact::choose_facet`] (among facets within the longest master edge the
-//! node projects into, smallest `|P|`, ties to the lowest index), or with `small_sliding` the facet,
+//! node projects into, smallest `|P|`, ties to the lowest index; with self-contact, among those
+//! facing the node's own surface: [`pair::Pass::choose`]), or with `small_sliding` the facet,
 //! shape functions and normal frozen at the start of the increment (see [`gap`]). Hysteresis: a
 //! node keeps its previous facet while it projects into it within [`HYSTERESIS`] and its `|P|`
 //! there exceeds the chosen one's by at most `HYSTERESIS · h` (no flip-flopping across an edge,
@@ -99,7 +100,7 @@ pub mod penalty;
 pub mod state;
 
 use tricontact::Vec3;
-use tricontact::contact::{PROJECTION_TOLERANCE, choose_facet};
+use tricontact::contact::PROJECTION_TOLERANCE;
 use tricontact::search::{Bvh, Query};
 
 use crate::analysis::Analysis;
@@ -294,9 +295,7 @@ impl ContactTerms {
             {
                 return Some((f, nodes, Gap::Finite(pair)));
             }
-            let Some((f, pair)) =
-                choose_facet(&pass.surface, bvh, x, u32::try_from(s).ok()?, pass.radius)
-            else {
+            let Some((f, pair)) = pass.choose(bvh, x, j) else {
                 // In no facet's projection region (below a valley, or just past the master's
                 // edge): the previous facet's plane while the foot stays within LOST_TOLERANCE of
                 // it and the node touches it, within the pair's tolerance (a multiplier holds
@@ -361,7 +360,14 @@ impl ContactTerms {
             previous: self.trial[p][q][j].second.facet,
             tolerance: HYSTERESIS * self.pairs[p].facet_size,
         };
-        let (g, _) = flank::second_flank(&pass.surface, bvh, x, (s, f), (pass.radius, hysteresis))?;
+        let facing = pass.facing(j, x);
+        let (g, _) = flank::second_flank(
+            &pass.surface,
+            bvh,
+            x,
+            (s, f),
+            (pass.radius, hysteresis, facing),
+        )?;
         let nodes = pass.surface.facets()[g as usize].map(|a| a as usize);
         let local = nodes.map(|a| self.relative(u, a, s));
         let pair = tricontact::NodeFacet::new(local[0], local[1], local[2], Vec3::zeros()).ok()?;
@@ -431,12 +437,17 @@ impl ContactTerms {
                 for (j, st) in self.trial[p][q].iter_mut().enumerate() {
                     let s = pass.slaves[j];
                     st.flank = st.facet.map_or(0.0, |f| {
-                        flank::flank_penetration(&pass.surface, &bvh, &x, (s, f), pass.radius)
+                        let facing = pass.facing(j, &x);
+                        flank::flank_penetration(
+                            &pass.surface,
+                            &bvh,
+                            &x,
+                            (s, f),
+                            (pass.radius, facing),
+                        )
                     });
                     if pair.small_sliding
-                        && let Ok(node) = u32::try_from(s)
-                        && let Some((_, now)) =
-                            choose_facet(&pass.surface, &bvh, &x, node, pass.radius)
+                        && let Some((_, now)) = pass.choose(&bvh, &x, j)
                     {
                         st.flank = st.flank.max(-now.gap());
                     }
@@ -508,10 +519,10 @@ impl ContactTerms {
                         point: x[s],
                         exclude: u32::try_from(s).ok(),
                     };
-                    let Some(hit) = bvh.closest(&pass.surface, &query, f64::INFINITY) else {
+                    let Some(facet) = closest_facing(pass, &bvh, &x, (j, &query)) else {
                         continue;
                     };
-                    let nodes = pass.surface.facets()[hit.facet as usize].map(|a| a as usize);
+                    let nodes = pass.surface.facets()[facet as usize].map(|a| a as usize);
                     let gap_at = |x: &[Vec3]| {
                         tricontact::NodeFacet::new(x[nodes[0]], x[nodes[1]], x[nodes[2]], x[s]).ok()
                     };
@@ -527,7 +538,7 @@ impl ContactTerms {
                             pair.name,
                             self.node_tags[s],
                             -now.gap(),
-                            pass.face_tags[hit.facet as usize],
+                            pass.face_tags[facet as usize],
                             pass.radius
                         ));
                     }
@@ -536,6 +547,37 @@ impl ContactTerms {
         }
         Ok(())
     }
+}
+
+/// How far, in search radii, [`ContactTerms::check_crossings`] looks for a facet that faces a
+/// self-contact node (the closest facet is most often one of its own side's).
+const CROSSING_REACH: f64 = 4.0;
+
+/// The closest facet of `pass`'s surface to slave `j` at `x` (`query` its point, excluding its
+/// own facets; `bvh` the surface's tree there); with self-contact, the closest that faces the
+/// node's own surface ([`tricontact::contact::faces`]) within [`CROSSING_REACH`] search radii.
+fn closest_facing(
+    pass: &pair::Pass,
+    bvh: &Bvh,
+    x: &[Vec3],
+    (j, query): (usize, &Query),
+) -> Option<u32> {
+    let Some(n) = pass.facing(j, x) else {
+        return bvh
+            .closest(&pass.surface, query, f64::INFINITY)
+            .map(|hit| hit.facet);
+    };
+    // Sorted by distance, then facet index.
+    bvh.within(&pass.surface, query, CROSSING_REACH * pass.radius)
+        .into_iter()
+        .find(|hit| {
+            let [a, b, c] = pass.surface.corners(hit.facet, x);
+            (b - a)
+                .cross(&(c - a))
+                .try_normalize(0.0)
+                .is_some_and(|w| tricontact::contact::faces(&w, &n))
+        })
+        .map(|hit| hit.facet)
 }
 
 fn scatter(

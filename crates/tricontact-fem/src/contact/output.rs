@@ -17,7 +17,8 @@
 //! passes, a second flank's `λ` included), `_active` (nodes closed on either constraint, of both
 //! passes with `two_pass`), `_max_penetration` (`max(0, −P)` over every slave node with a facet, open
 //! or closed, so that a node left open inside the master shows), `_area`
-//! (lumped area of the closed nodes; with `two_pass`, the mean of the two sides'), `_min_pressure` and `_max_pressure` (`contact_pressure` over
+//! (lumped area of the closed nodes; with `two_pass`, the mean of the two sides'; with
+//! self-contact, half, both sides being slaves), `_min_pressure` and `_max_pressure` (`contact_pressure` over
 //! the closed slave nodes that have an area; 0 when there are none).
 
 use super::ContactTerms;
@@ -117,11 +118,14 @@ impl ContactTerms {
             out.push((format!("{}_active", pair.name), active as f64));
             out.push((format!("{}_max_penetration", pair.name), pen));
             // Each pass measures the contact area on its own slave side: their mean, not their
-            // sum (two passes counted the interface twice).
-            out.push((
-                format!("{}_area", pair.name),
-                area / pair.passes.len().max(1) as f64,
-            ));
+            // sum (two passes counted the interface twice). Self-contact has both sides of each
+            // touching region in its one pass: half.
+            let sides = if pair.is_self_contact() {
+                2
+            } else {
+                pair.passes.len().max(1)
+            };
+            out.push((format!("{}_area", pair.name), area / sides as f64));
             out.push((format!("{}_min_pressure", pair.name), p_min.min(p_max)));
             out.push((format!("{}_max_pressure", pair.name), p_max));
         }

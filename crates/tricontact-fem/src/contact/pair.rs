@@ -28,6 +28,18 @@
 //! units than the mesh's. Far below, penetrations are that many times larger than the default's;
 //! far above, the tangent is about that many times worse conditioned.
 //!
+//! # Self-contact
+//! A pair whose slave and master are one surface group is the contact of that surface with
+//! itself (a body folding onto itself, or several bodies' faces named as one group). One pass:
+//! every node of the group is a slave against every facet of the group but its own, and only
+//! against the facets that **face** its own side of the surface, `W` within 60° of `−n̂` with `n`
+//! the node's angle-weighted outward normal at the current positions
+//! ([`tricontact::contact::choose_facet_facing`]); the rest of its own side, which a node near a
+//! bend can lie behind, is left out. Since both sides of a touching region are slaves, each is
+//! held against the other as with `two_pass` (hence `two_pass` is refused as redundant, and so is
+//! `method = "multiplier"`, as for `two_pass`); `adjust` is refused too (it would move nodes of
+//! both sides onto each other). The group is a surface, as every master is.
+//!
 //! # Adjust
 //! With `adjust = d`, every slave node whose initial gap is `−d ≤ P < 0` is moved along `W` onto the
 //! master surface in the reference configuration (no strain). Deeper penetrations are kept and
@@ -36,7 +48,7 @@
 use std::collections::HashMap;
 
 use tricontact::Vec3;
-use tricontact::contact::{PROJECTION_TOLERANCE, choose_facet};
+use tricontact::contact::{PROJECTION_TOLERANCE, choose_facet, choose_facet_facing};
 use tricontact::search::{Bvh, Surface};
 
 use crate::loads::{node_to_elements, outward_faces};
@@ -61,6 +73,81 @@ pub struct Pass {
     pub face_tags: Vec<u64>,
     /// Search radius: the longest facet edge.
     pub radius: f64,
+    /// Self-contact: for each slave node, the facets of `surface` around it, whose normals give
+    /// its outward normal ([`Pass::facing`]); `None` for a pass between two groups.
+    pub fans: Option<Vec<Vec<u32>>>,
+}
+
+impl Pass {
+    /// With self-contact, the outward normal of slave `j`'s own surface at positions `x`: the
+    /// facets' unit normals around the node weighted by their angles at it (of no particular
+    /// length); `None` for a pass between two groups. Weighted by angle, the normal of a node on
+    /// a box's edge bisects its two faces and that of a corner is the diagonal, whatever the
+    /// facets' sizes (weighted by area, a node on the edge of a block standing on another, its
+    /// side faces' facets twice the size of its bottom's, did not face the block below).
+    #[must_use]
+    pub fn facing(&self, j: usize, x: &[Vec3]) -> Option<Vec3> {
+        let fan = self.fans.as_ref()?.get(j)?;
+        Some(fan_normal(&self.surface, fan, *self.slaves.get(j)?, x))
+    }
+
+    /// The facet slave `j` is constrained against at positions `x` (`bvh` the surface's tree
+    /// there) and the pair: [`choose_facet`], or with self-contact
+    /// [`tricontact::contact::choose_facet_facing`] with the node's [`Pass::facing`] normal.
+    #[must_use]
+    pub fn choose(&self, bvh: &Bvh, x: &[Vec3], j: usize) -> Option<(u32, tricontact::NodeFacet)> {
+        let node = u32::try_from(*self.slaves.get(j)?).ok()?;
+        match self.facing(j, x) {
+            Some(n) => choose_facet_facing(&self.surface, bvh, x, node, self.radius, n),
+            None => choose_facet(&self.surface, bvh, x, node, self.radius),
+        }
+    }
+}
+
+impl ContactPair {
+    /// `true` for the contact of a surface group with itself (slave = master).
+    #[must_use]
+    pub fn is_self_contact(&self) -> bool {
+        self.slave_group == self.master_group
+    }
+}
+
+/// The unit normals of the facets `fan` of `surface` around node `s`, at positions `x`, weighted
+/// by their angles at `s` (see [`Pass::facing`]).
+fn fan_normal(surface: &Surface, fan: &[u32], s: usize, x: &[Vec3]) -> Vec3 {
+    fan.iter().fold(Vec3::zeros(), |n, &f| {
+        let nodes = surface.facets()[f as usize];
+        let [a, b, c] = surface.corners(f, x);
+        // The corner at the node, then the two others.
+        let (o, p, q) = match nodes.iter().position(|&v| v as usize == s) {
+            Some(0) => (a, b, c),
+            Some(1) => (b, c, a),
+            _ => (c, a, b),
+        };
+        match (b - a).cross(&(c - a)).try_normalize(0.0) {
+            Some(w) => n + (p - o).angle(&(q - o)) * w,
+            None => n,
+        }
+    })
+}
+
+/// Self-contact: an initial penetration deeper than this share of the mean edge is refused (a
+/// part thinner than the search radius with both faces in the group, whose nodes lie behind the
+/// other face: contact would push its faces apart).
+const SELF_OVERLAP: f64 = 0.01;
+
+/// For each of `slaves`, the facets of `surface` around it.
+fn fans(slaves: &[usize], surface: &Surface) -> Vec<Vec<u32>> {
+    let place: HashMap<usize, usize> = slaves.iter().enumerate().map(|(j, &a)| (a, j)).collect();
+    let mut fans = vec![Vec::new(); slaves.len()];
+    for (f, nodes) in (0u32..).zip(surface.facets()) {
+        for a in nodes {
+            if let Some(&j) = place.get(&(*a as usize)) {
+                fans[j].push(f);
+            }
+        }
+    }
+    fans
 }
 
 /// A resolved contact pair.
@@ -312,6 +399,7 @@ pub fn resolve(
 ) -> Result<ContactPair, Vec<String>> {
     let name = format!("{}-{}", def.slave, def.master);
     let mut problems = check_parameters(def, &name, at);
+    let self_contact = def.is_self_contact();
     let node_elems = node_to_elements(mesh.nodes.len(), &bodies.elements);
     let Some(sides) = sides(
         def,
@@ -365,7 +453,7 @@ pub fn resolve(
         (default_penalty, e, h_mean),
         &name,
     ));
-    if !def.two_pass && !rigid_master && !sides.s_facets.is_empty() {
+    if !def.two_pass && !rigid_master && !self_contact && !sides.s_facets.is_empty() {
         let (s_mean, _) = edge_lengths(mesh, &sides.s_facets);
         if s_mean > COARSE_SLAVE * h_mean {
             report.push(format!(
@@ -374,25 +462,31 @@ pub fn resolve(
             ));
         }
     }
-    if one_part(
-        mesh.nodes.len(),
-        &bodies.elements,
-        &sides.slaves,
-        surface.facets(),
-    ) {
+    if !self_contact
+        && one_part(
+            mesh.nodes.len(),
+            &bodies.elements,
+            &sides.slaves,
+            surface.facets(),
+        )
+    {
         report.push(format!(
             "contact '{name}': slave '{}' and master '{}' lie on one connected part of the mesh (self-contact); if the pair is meant between two bodies, check the group names",
             def.slave, def.master
         ));
     }
-    let mut passes = vec![pass(
+    let mut first = pass(
         mesh,
         Some(sides.slaves),
         &sides.slave_faces,
         surface,
         sides.m_tags,
         h_max,
-    )];
+    );
+    if self_contact {
+        first.fans = Some(fans(&first.slaves, &first.surface));
+    }
+    let mut passes = vec![first];
     if def.two_pass {
         // The master's nodes against the slave's facets.
         let (_, s_max) = edge_lengths(mesh, &sides.s_facets);
@@ -666,13 +760,16 @@ fn pass(
         surface,
         face_tags,
         radius,
+        fans: None,
     }
 }
 
 /// The checks of a `[[contact]]` table's own values, as messages.
 fn check_parameters(def: &ContactDef, name: &str, at: &dyn Fn(&str) -> String) -> Vec<String> {
     let mut problems = Vec::new();
-    if def.two_pass && def.method == ContactMethod::Multiplier {
+    if def.is_self_contact() {
+        problems.extend(self_contact_problems(def, name, at));
+    } else if def.two_pass && def.method == ContactMethod::Multiplier {
         problems.push(format!(
             "{}contact '{name}': two_pass with method = \"multiplier\" gives redundant constraints (each node pair constrained twice, a singular saddle-point system); use single pass or the penalty or augmented method",
             at("two_pass")
@@ -698,6 +795,32 @@ fn check_parameters(def: &ContactDef, name: &str, at: &dyn Fn(&str) -> String) -
     {
         problems.push(format!(
             "{}contact '{name}': adjust must be ≥ 0 (got {d})",
+            at("adjust")
+        ));
+    }
+    problems
+}
+
+/// What a self-contact pair (slave = master) refuses: two passes (one already holds both sides),
+/// multipliers (both sides' constraints repeat each other, as with `two_pass`) and `adjust`
+/// (it would move both sides' nodes onto each other).
+fn self_contact_problems(def: &ContactDef, name: &str, at: &dyn Fn(&str) -> String) -> Vec<String> {
+    let mut problems = Vec::new();
+    if def.two_pass {
+        problems.push(format!(
+            "{}contact '{name}': self-contact (slave = master) needs no two_pass: every node of the group is already a slave against the group's facets that face it",
+            at("two_pass")
+        ));
+    }
+    if def.method == ContactMethod::Multiplier {
+        problems.push(format!(
+            "{}contact '{name}': self-contact (slave = master) with method = \"multiplier\" gives redundant constraints (both sides of a touching region are slaves, each node pair constrained twice, a singular saddle-point system); use the penalty or augmented method",
+            at("method")
+        ));
+    }
+    if def.adjust.is_some() {
+        problems.push(format!(
+            "{}contact '{name}': adjust is not available with self-contact (slave = master): it would move the nodes of both sides onto each other",
             at("adjust")
         ));
     }
@@ -801,9 +924,17 @@ fn initial_penetrations(
     let rigid_master = is_rigid(surface.facets(), in_body);
     let slave_normals = outward_normals(&x, s_facets);
     let (mut facing, mut away) = (0usize, 0usize);
-    for &a in slaves {
+    let fans = def.is_self_contact().then(|| fans(slaves, surface));
+    for (k, &a) in slaves.iter().enumerate() {
         let Ok(idx) = u32::try_from(a) else { continue };
-        let Some((_, pair)) = choose_facet(surface, &bvh, &x, idx, h_max) else {
+        // Self-contact: only the facets facing the node's own side of the surface.
+        let chosen = if let Some(fans) = &fans {
+            let n = fan_normal(surface, &fans[k], a, &x);
+            choose_facet_facing(surface, &bvh, &x, idx, h_max, n)
+        } else {
+            choose_facet(surface, &bvh, &x, idx, h_max)
+        };
+        let Some((_, pair)) = chosen else {
             continue;
         };
         // Only where the two surfaces are roughly parallel (|cos| > 1/2): a slave face at
@@ -855,6 +986,16 @@ fn initial_penetrations(
             "contact '{name}': {} slave nodes moved onto the master surface ({moved} penetrating it, {closed} apart from it; adjust = {adjust:e})",
             moved + closed
         ));
+    }
+    if def.is_self_contact() && largest > SELF_OVERLAP * h_mean {
+        return Err(vec![format!(
+            "{}contact '{name}': {deep} nodes of the group start behind facets of the group that face them, largest {largest:.3e} at node {} ({:.4e}, {:.4e}, {:.4e}): the group holds both faces of a part thinner than the search radius {h_max:.3e} (its longest edge), or parts that overlap; in self-contact name only the faces that are to meet",
+            at("master"),
+            mesh.node_tags[worst],
+            mesh.nodes[worst][0],
+            mesh.nodes[worst][1],
+            mesh.nodes[worst][2]
+        )]);
     }
     if deep > 0 {
         let beyond = match def.adjust {
