@@ -245,6 +245,12 @@ impl<'a> Deck<'a> {
 
     /// Surfaces, interaction and pair(s) of contact pair `p`.
     fn contact(&mut self, p: usize, pair: &ContactPair) -> Result<(), InpError> {
+        if pair.is_self_contact() {
+            return Err(InpError(format!(
+                "contact '{}': self-contact (slave = master) is not exported: CalculiX's node-to-surface pairs would constrain each node against its own side of the surface, which tricontact leaves out",
+                pair.name
+            )));
+        }
         let pass = &pair.passes[0];
         let slope = self.slope(pair)?;
         if pair.method != ContactMethod::Penalty {

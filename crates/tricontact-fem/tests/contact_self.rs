@@ -387,7 +387,10 @@ fn self_contact_refuses_two_passes_multipliers_and_adjust() {
         };
         let error = error.to_string();
         assert!(
-            error.contains("self-contact") && error.contains(words) && error.contains(key),
+            error.contains("self-contact")
+                && error.contains(words)
+                && error.contains("self.toml:")
+                && error.contains(key),
             "{error}"
         );
     }
@@ -424,7 +427,8 @@ name = "s"
     };
     let error = error.to_string();
     assert!(
-        error.contains("start behind facets of the group that face them, largest 1.000e-1 at node")
+        error.contains("plate.toml:")
+            && error.contains("start behind facets of the group that face them, largest 1.000e-1")
             && error.contains("thinner than the search radius"),
         "{error}"
     );

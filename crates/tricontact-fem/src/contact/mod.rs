@@ -497,7 +497,8 @@ impl ContactTerms {
     /// of that facet's plane at the start of the increment (`P > −radius`: in front of it, or in
     /// contact); the increment then fails and is cut back, until its steps stay within the
     /// radius. A node already deeper at the start (meshes that overlap from the outset) is left
-    /// to the initial-penetration check.
+    /// to the initial-penetration check. With self-contact the facets tested are those that face
+    /// the node within a few search radii ([`crossing_candidates`]), not only the closest.
     fn check_crossings(&self, u: &[f64]) -> Result<(), String> {
         // No increment begun (no start positions): nothing to compare with.
         if self.start.len() != self.reference.len() {
@@ -519,28 +520,28 @@ impl ContactTerms {
                         point: x[s],
                         exclude: u32::try_from(s).ok(),
                     };
-                    let Some(facet) = closest_facing(pass, &bvh, &x, (j, &query)) else {
-                        continue;
-                    };
-                    let nodes = pass.surface.facets()[facet as usize].map(|a| a as usize);
-                    let gap_at = |x: &[Vec3]| {
-                        tricontact::NodeFacet::new(x[nodes[0]], x[nodes[1]], x[nodes[2]], x[s]).ok()
-                    };
-                    let (Some(now), Some(then)) = (gap_at(&x), gap_at(&self.start)) else {
-                        continue;
-                    };
-                    if now.gap() < 0.0
-                        && then.gap() > -pass.radius
-                        && now.projection.is_inside(PROJECTION_TOLERANCE)
-                    {
-                        return Err(format!(
-                            "contact '{}': slave node {} went through the master surface in this increment, {:.3e} behind face {}, beyond the search radius {:.3e} (the longest master edge), so it found no facet; smaller increments keep each Newton step within reach",
-                            pair.name,
-                            self.node_tags[s],
-                            -now.gap(),
-                            pass.face_tags[facet as usize],
-                            pass.radius
-                        ));
+                    for facet in crossing_candidates(pass, &bvh, &x, (j, &query)) {
+                        let nodes = pass.surface.facets()[facet as usize].map(|a| a as usize);
+                        let gap_at = |x: &[Vec3]| {
+                            tricontact::NodeFacet::new(x[nodes[0]], x[nodes[1]], x[nodes[2]], x[s])
+                                .ok()
+                        };
+                        let (Some(now), Some(then)) = (gap_at(&x), gap_at(&self.start)) else {
+                            continue;
+                        };
+                        if now.gap() < 0.0
+                            && then.gap() > -pass.radius
+                            && now.projection.is_inside(PROJECTION_TOLERANCE)
+                        {
+                            return Err(format!(
+                                "contact '{}': slave node {} went through the master surface in this increment, {:.3e} behind face {}, beyond the search radius {:.3e} (the longest master edge), so it found no facet; smaller increments keep each Newton step within reach",
+                                pair.name,
+                                self.node_tags[s],
+                                -now.gap(),
+                                pass.face_tags[facet as usize],
+                                pass.radius
+                            ));
+                        }
                     }
                 }
             }
@@ -549,28 +550,33 @@ impl ContactTerms {
     }
 }
 
-/// How far, in search radii, [`ContactTerms::check_crossings`] looks for a facet that faces a
-/// self-contact node (the closest facet is most often one of its own side's).
+/// How far, in search radii, [`ContactTerms::check_crossings`] looks for the facets that face a
+/// self-contact node.
 const CROSSING_REACH: f64 = 4.0;
 
-/// The closest facet of `pass`'s surface to slave `j` at `x` (`query` its point, excluding its
-/// own facets; `bvh` the surface's tree there); with self-contact, the closest that faces the
-/// node's own surface ([`tricontact::contact::faces`]) within [`CROSSING_REACH`] search radii.
-fn closest_facing(
+/// The facets of `pass`'s surface that [`ContactTerms::check_crossings`] tests slave `j` against
+/// at `x` (`query` its point, excluding its own facets; `bvh` the surface's tree there): the
+/// closest; with self-contact, every facet within [`CROSSING_REACH`] search radii that faces the
+/// node's own surface ([`tricontact::contact::faces`]), nearest first. (The closest facing facet
+/// alone would not do: it is often the far face of the node's own part, which the node has
+/// always been behind, while the facet it went through lies farther.)
+fn crossing_candidates(
     pass: &pair::Pass,
     bvh: &Bvh,
     x: &[Vec3],
     (j, query): (usize, &Query),
-) -> Option<u32> {
+) -> Vec<u32> {
     let Some(n) = pass.facing(j, x) else {
         return bvh
             .closest(&pass.surface, query, f64::INFINITY)
-            .map(|hit| hit.facet);
+            .map(|hit| hit.facet)
+            .into_iter()
+            .collect();
     };
     // Sorted by distance, then facet index.
     bvh.within(&pass.surface, query, CROSSING_REACH * pass.radius)
         .into_iter()
-        .find(|hit| {
+        .filter(|hit| {
             let [a, b, c] = pass.surface.corners(hit.facet, x);
             (b - a)
                 .cross(&(c - a))
@@ -578,6 +584,7 @@ fn closest_facing(
                 .is_some_and(|w| tricontact::contact::faces(&w, &n))
         })
         .map(|hit| hit.facet)
+        .collect()
 }
 
 fn scatter(

@@ -38,7 +38,11 @@
 //! bend can lie behind, is left out. Since both sides of a touching region are slaves, each is
 //! held against the other as with `two_pass` (hence `two_pass` is refused as redundant, and so is
 //! `method = "multiplier"`, as for `two_pass`); `adjust` is refused too (it would move nodes of
-//! both sides onto each other). The group is a surface, as every master is.
+//! both sides onto each other). The group is a surface, as every master is. A group holding both
+//! faces of a part thinner than the search radius puts each face's nodes behind the other face,
+//! which faces them: initial penetrations deeper than [`SELF_OVERLAP`] of the mean edge are
+//! refused, with that reason. (A part that thins below the radius under load is not caught.)
+//! `tricontact export` refuses self-contact.
 //!
 //! # Adjust
 //! With `adjust = d`, every slave node whose initial gap is `−d ≤ P < 0` is moved along `W` onto the
@@ -808,7 +812,7 @@ fn self_contact_problems(def: &ContactDef, name: &str, at: &dyn Fn(&str) -> Stri
     let mut problems = Vec::new();
     if def.two_pass {
         problems.push(format!(
-            "{}contact '{name}': self-contact (slave = master) needs no two_pass: every node of the group is already a slave against the group's facets that face it",
+            "{}contact '{name}': self-contact (slave = master) needs no two_pass (remove it): every node of the group is already a slave against the group's facets that face it",
             at("two_pass")
         ));
     }
@@ -820,7 +824,7 @@ fn self_contact_problems(def: &ContactDef, name: &str, at: &dyn Fn(&str) -> Stri
     }
     if def.adjust.is_some() {
         problems.push(format!(
-            "{}contact '{name}': adjust is not available with self-contact (slave = master): it would move the nodes of both sides onto each other",
+            "{}contact '{name}': adjust is not available with self-contact (slave = master; remove it): it would move the nodes of both sides onto each other",
             at("adjust")
         ));
     }
@@ -989,7 +993,7 @@ fn initial_penetrations(
     }
     if def.is_self_contact() && largest > SELF_OVERLAP * h_mean {
         return Err(vec![format!(
-            "{}contact '{name}': {deep} nodes of the group start behind facets of the group that face them, largest {largest:.3e} at node {} ({:.4e}, {:.4e}, {:.4e}): the group holds both faces of a part thinner than the search radius {h_max:.3e} (its longest edge), or parts that overlap; in self-contact name only the faces that are to meet",
+            "{}contact '{name}': {deep} nodes of the group start behind facets of the group that face them, largest {largest:.3e} (more than {SELF_OVERLAP} of the mean edge {h_mean:.3e}) at node {} ({:.4e}, {:.4e}, {:.4e}): the group holds both faces of a part thinner than the search radius {h_max:.3e} (its longest edge), or surfaces that overlap at the start; in self-contact name only the faces that are to meet",
             at("master"),
             mesh.node_tags[worst],
             mesh.nodes[worst][0],
