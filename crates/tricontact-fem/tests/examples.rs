@@ -11,7 +11,9 @@
 //!   with multipliers; no slave node is left inside the base, whichever way Newton starts an
 //!   increment;
 //! * v-groove (examples/v-groove): a wedge pressed into a V-groove, a row of its bottom nodes on
-//!   the valley line; each method holds them on both flanks.
+//!   the valley line; each method holds them on both flanks;
+//! * self-contact (examples/self-contact): a block with a slot squeezed shut, the slot's surface
+//!   in contact with itself, as a pair between its two walls holds it.
 
 mod common;
 
@@ -545,6 +547,39 @@ fn the_v_groove_example_holds_the_valley_nodes_on_both_flanks() {
     );
     assert!(
         (penalty - multiplier).abs() < 0.02 * multiplier,
+        "{forces:?}"
+    );
+}
+
+/// The self-contact example, as `examples/README.md` gives it: the slot's surface in contact with
+/// itself holds the squeezed slot shut (nothing deeper than 10⁻⁴, half a thousandth of the mean
+/// edge, with the augmented Lagrangian), in its twelve increments; the pair between the slot's
+/// two walls with two passes gives the force within 10⁻⁴ (2·10⁻⁵ measured: the default penalty
+/// `10 E h` differs with the two groups' mean edges; with one given penalty the two runs are equal
+/// to seven digits).
+#[test]
+fn the_self_contact_example_holds_the_slot_shut() {
+    let mut forces = Vec::new();
+    for (model, pair) in [
+        ("model.toml", "slot-slot"),
+        ("two-groups.toml", "left_wall-right_wall"),
+    ] {
+        let (summary, record) = run_example("self-contact", model, None);
+        let depth = last_column(&record, &format!("{pair}_max_penetration"));
+        let force = last_column(&record, &format!("{pair}_normal_force"));
+        let closed = last_column(&record, &format!("{pair}_active"));
+        println!(
+            "self-contact {model}: {} increments, {} iterations, {} cutbacks, normal force {force:.6e}, {closed} closed, largest penetration {depth:.3e}",
+            summary.increments, summary.iterations, summary.cutbacks
+        );
+        assert_eq!(summary.increments, 12, "{model}: increments");
+        assert!(depth < 1e-4, "{model}: {depth}");
+        assert!(closed > 100.0, "{model}: {closed} closed");
+        forces.push(force);
+    }
+    assert!(forces[0] > 0.1, "{forces:?}");
+    assert!(
+        (forces[0] - forces[1]).abs() < 1e-4 * forces[1],
         "{forces:?}"
     );
 }
