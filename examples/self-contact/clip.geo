@@ -1,8 +1,8 @@
 // A rubber block with a slot, squeezed in a vise: a U-shaped body 2.2 wide (x), 1 deep (y) and 4
 // high (z), a base 1 high and two arms 1 wide with a slot 0.2 wide between them. Its two outer
-// sides are moved 0.15 towards each other, so the slot closes and its walls press on each
-// other: the slot's surface (both walls and its floor, one group) comes into contact with
-// itself. Linear tetrahedra, unstructured, so that the two walls' meshes do not match.
+// sides are moved 0.12 towards each other (model.toml), so the slot closes and its walls press
+// on each other: the slot's surface (both walls and its floor, one group) comes into contact
+// with itself. Linear tetrahedra, unstructured, so that the two walls' meshes do not match.
 //   gmsh -3 -format msh41 clip.geo -o clip.msh
 SetFactory("OpenCASCADE");
 Box(1) = {0, 0, 0, 2.2, 1, 4};

@@ -433,3 +433,134 @@ name = "s"
         "{error}"
     );
 }
+
+/// The crossing check with self-contact: two blocks whose touching faces are one group, the
+/// upper block moved down 0.19 in one step (beyond the search radius, the group's longest edge,
+/// 0.118): every node of the group is then without a facet, behind a facet of the other block
+/// that faces it, and the increment is refused, naming a node and the face it went through. A
+/// move of 0.05 (within reach) is accepted, the nodes held.
+#[test]
+fn a_self_contact_node_pushed_through_in_one_step_is_caught() {
+    let base =
+        tricontact_fem::structured::box_mesh([1.0, 1.0, 0.5], [12, 12, 1], ElementKind::Hex8);
+    let block = tricontact_fem::structured::box_mesh([0.5, 0.5, 1.0], [6, 6, 4], ElementKind::Hex8);
+    let mut mesh = tricontact_fem::structured::stack(&base, &block, [0.26, 0.27, 0.51]);
+    let mut both = elements_of(&mesh, "lower_zmax");
+    both.extend(elements_of(&mesh, "upper_zmin"));
+    let group = face_group(&mesh, "faces", both);
+    mesh.groups.push(group);
+    let upper = mesh
+        .groups
+        .iter()
+        .find(|g| g.name == "upper_solid")
+        .expect("block");
+    let mut block_nodes: Vec<usize> = upper
+        .elements
+        .iter()
+        .flat_map(|&e| mesh.elements[e].nodes.clone())
+        .collect();
+    block_nodes.sort_unstable();
+    block_nodes.dedup();
+    let text = blocks_model("slave = \"faces\"\nmaster = \"faces\"", "penalty");
+    let an = common::analysis(mesh.clone(), &text);
+    assert!((an.contacts[0].passes[0].radius - 0.5 / 6.0 * 2f64.sqrt()).abs() < 1e-12);
+    for (down, through) in [(0.19, true), (0.05, false)] {
+        let mut terms = ContactTerms::new(&an);
+        let dofs = 3 * mesh.nodes.len() + terms.num_extra();
+        terms.begin_increment(&vec![0.0; dofs]).expect("begin");
+        let mut u = vec![0.0; dofs];
+        for &a in &block_nodes {
+            u[3 * a + 2] = -down;
+        }
+        terms
+            .add_terms(&u, &mut vec![0.0; dofs], &mut Vec::new())
+            .expect("terms");
+        let checked = terms.after_converged(&u);
+        println!("moved {down}: {checked:?}");
+        match checked {
+            Err(e) if through => assert!(
+                e.contains("contact 'faces-faces': slave node") && e.contains("went through"),
+                "{e}"
+            ),
+            Ok(_) if !through => {}
+            other => panic!("moved {down}: {other:?}"),
+        }
+    }
+}
+
+/// A wedge pressed into a V-groove (the valley example of `contact_valley.rs`), the groove's and
+/// the wedge's bottom one group in contact with itself, held as a two-pass pair between them
+/// holds it: the same iterations, force and nodes on two flanks (the wedge's nodes on the valley
+/// line held by both flanks of the groove), the cutbacks included. (Second flanks, too, must face
+/// the node; on this model the kink test leaves no candidate that does not, so the filter is
+/// not what this checks.)
+#[test]
+fn a_v_groove_named_as_one_surface_is_held_as_a_two_pass_pair_holds_it() {
+    let mut mesh = common::v_groove([16, 4, 4], [8, 3, 3], ElementKind::Hex8);
+    let mut both = elements_of(&mesh, "lower_zmax");
+    both.extend(elements_of(&mesh, "upper_zmin"));
+    let group = face_group(&mesh, "groove", both);
+    mesh.groups.push(group);
+    let model = |pair: &str| {
+        format!(
+            r#"
+[[material]]
+name = "base"
+type = "neo_hooke"
+E = 1000.0
+nu = 0.3
+[[material]]
+name = "wedge"
+type = "neo_hooke"
+E = 100.0
+nu = 0.3
+[[body]]
+group = "lower_solid"
+material = "base"
+[[body]]
+group = "upper_solid"
+material = "wedge"
+[[boundary]]
+group = "lower_zmin"
+fix = ["x", "y", "z"]
+[[boundary]]
+group = "upper_zmax"
+displacement = {{ x = 0.0, y = 0.0, z = -0.04 }}
+[[contact]]
+{pair}
+method = "penalty"
+penalty = 2000.0
+[[step]]
+name = "press"
+increments = 4
+nlgeom = true
+"#
+        )
+    };
+    let mut runs = Vec::new();
+    for pair in [
+        "slave = \"groove\"\nmaster = \"groove\"",
+        "slave = \"upper_zmin\"\nmaster = \"lower_zmax\"\ntwo_pass = true",
+    ] {
+        let an = common::analysis(mesh.clone(), &model(pair));
+        let (terms, records, _) = common::solve_contact(&an);
+        let iterations: Vec<usize> = records.iter().map(|r| r.iterations).collect();
+        let force = column(&terms, "_normal_force");
+        let (two, _) = common::second_flanks(&terms);
+        println!("{pair:?}: iterations {iterations:?}, force {force:.9e}, {two} on two flanks");
+        runs.push((iterations, force, two));
+    }
+    assert!(
+        runs[1].2 >= 4,
+        "the valley nodes on two flanks: {}",
+        runs[1].2
+    );
+    assert_eq!(runs[0].0, runs[1].0, "iterations");
+    assert_eq!(runs[0].2, runs[1].2, "nodes on two flanks");
+    assert!(
+        (runs[0].1 - runs[1].1).abs() <= 1e-9 * runs[1].1,
+        "forces {} and {}",
+        runs[0].1,
+        runs[1].1
+    );
+}

@@ -23,6 +23,11 @@
 //! Newton iterations and cutbacks; the smaller modulus alone costs penalty runs accuracy and an
 //! unloading augmented run cutbacks (measured in the README, "The default penalty").
 //!
+//! With self-contact, `E` is the geometric mean of the smallest and largest moduli of the bodies
+//! the group's faces bound (for two bodies, what a pair between them takes; taking the first
+//! face's body for both sides made a group over a stiff base and a soft block ten times too stiff,
+//! and its run failed where the two-pass pair converged).
+//!
 //! A given `penalty` below 10⁻² or above 10⁴ times that default ([`PENALTY_NOTE_RANGE`]) is
 //! reported (not refused): such a factor most often comes from a modulus or a length in other
 //! units than the mesh's. Far below, penetrations are that many times larger than the default's;
@@ -418,13 +423,17 @@ pub fn resolve(
     mark_rigid(&sides.m_facets, in_body, rigid);
     // A rigid tool's nodes do not move against each other: they cannot poke between slave nodes.
     let rigid_master = is_rigid(&sides.m_facets, in_body);
-    let e = youngs_modulus(
-        mesh,
-        bodies,
-        &node_elems,
-        &sides.master.elements,
-        &sides.slaves,
-    );
+    let e = if self_contact {
+        self_contact_modulus(mesh, bodies, &node_elems, &sides.master.elements)
+    } else {
+        youngs_modulus(
+            mesh,
+            bodies,
+            &node_elems,
+            &sides.master.elements,
+            &sides.slaves,
+        )
+    };
     let (h_mean, h_max) = edge_lengths(mesh, &sides.m_facets);
     let default_penalty = 10.0 * e * h_mean;
     let penalty = def.penalty.unwrap_or(default_penalty);
@@ -716,19 +725,50 @@ fn youngs_modulus(
     master_faces: &[usize],
     slaves: &[usize],
 ) -> f64 {
-    let master_e = master_faces.iter().find_map(|&f| {
-        let c = &mesh.elements[f].nodes;
-        node_elems[c[0]]
-            .iter()
-            .find(|&&e| c.iter().all(|a| bodies.elements[e].nodes.contains(a)))
-            .map(|&e| bodies.youngs[e])
-    });
+    let master_e = master_faces
+        .iter()
+        .find_map(|&f| face_modulus(mesh, bodies, node_elems, f));
     let slave_e = slaves
         .first()
         .and_then(|&a| node_elems[a].first().map(|&e| bodies.youngs[e]));
     match (master_e, slave_e) {
         (Some(m), Some(s)) => (m * s).sqrt(),
         (m, s) => m.or(s).unwrap_or(1.0),
+    }
+}
+
+/// The Young's modulus of the body element face `f` bounds, if any.
+fn face_modulus(
+    mesh: &Mesh,
+    bodies: &Bodies<'_>,
+    node_elems: &[Vec<usize>],
+    f: usize,
+) -> Option<f64> {
+    let c = &mesh.elements[f].nodes;
+    node_elems[c[0]]
+        .iter()
+        .find(|&&e| c.iter().all(|a| bodies.elements[e].nodes.contains(a)))
+        .map(|&e| bodies.youngs[e])
+}
+
+/// Young's modulus for the default penalty of a self-contact pair whose faces are `faces`: the
+/// geometric mean of the smallest and largest moduli of the body elements they bound (the rule of
+/// two groups, master's and slave's, when the group spans two bodies; a body's own modulus for
+/// one); 1 if they bound none.
+fn self_contact_modulus(
+    mesh: &Mesh,
+    bodies: &Bodies<'_>,
+    node_elems: &[Vec<usize>],
+    faces: &[usize],
+) -> f64 {
+    let (low, high) = faces
+        .iter()
+        .filter_map(|&f| face_modulus(mesh, bodies, node_elems, f))
+        .fold((f64::INFINITY, 0.0f64), |(l, h), e| (l.min(e), h.max(e)));
+    if low <= high {
+        (low * high).sqrt()
+    } else {
+        1.0
     }
 }
 
