@@ -18,6 +18,8 @@ for m in multiplier augmented penalty two-pass; do
   done
 done
 run examples/sliding/model.toml
+run examples/self-contact/model.toml
+run examples/self-contact/two-groups.toml
 for level in coarse medium fine; do
   ./target/release/tricontact plot examples/hertz/results/multiplier-$level \
     examples/hertz/results/penalty-$level examples/hertz/results/augmented-$level \
