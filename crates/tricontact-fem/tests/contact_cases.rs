@@ -111,16 +111,6 @@ fn node_force(terms: &ContactTerms, a: usize) -> [f64; 3] {
     [f[3 * a], f[3 * a + 1], f[3 * a + 2]]
 }
 
-fn history(terms: &ContactTerms, key: &str) -> f64 {
-    use tricontact_fem::assembly::ExtraTerms;
-    terms
-        .history()
-        .into_iter()
-        .find(|(k, _)| k.ends_with(key))
-        .map(|(_, v)| v)
-        .expect("column")
-}
-
 /// A 0.25 × 0.25 single-hex block on a rigid flat tet4 master, its corner `(x0, y0)`.
 fn small_block(x0: f64, y0: f64) -> Mesh {
     let l = box_mesh([1.0, 1.0, 0.5], [2, 2, 1], ElementKind::Tet4);
@@ -309,8 +299,8 @@ increments = {increments}
     let mut terms = ContactTerms::new(&an);
     let summary = tricontact_fem::driver::run(&an, &mut terms, &mut |_| Ok(())).expect("run");
     (
-        history(&terms, "_normal_force"),
-        history(&terms, "_max_penetration"),
+        common::contact_column(&terms, "_normal_force"),
+        common::contact_column(&terms, "_max_penetration"),
         summary.cutbacks,
     )
 }
@@ -466,9 +456,9 @@ fn block_pressed_on_a_convex_edge_stays_within_the_tolerance() {
     );
     let an = common::analysis(mesh, &text);
     let (terms, _, _) = common::solve_contact(&an);
-    let pen = history(&terms, "_max_penetration");
+    let pen = common::contact_column(&terms, "_max_penetration");
     let tol = an.contacts[0].tolerance;
-    assert!(history(&terms, "_active") > 0.0);
+    assert!(common::contact_column(&terms, "_active") > 0.0);
     assert!(pen <= tol, "penetration {pen:e} > tolerance {tol:e}");
 }
 
@@ -673,8 +663,8 @@ fn block_pressed_by_a_rigid_tool_without_volume_elements() {
     let (terms, rec, _) = common::solve_contact(&an);
     let last = rec.last().expect("increments");
     let reaction = last.reactions[1][2];
-    let force = history(&terms, "_normal_force");
-    assert!(force > 0.0 && history(&terms, "_active") == 9.0);
+    let force = common::contact_column(&terms, "_normal_force");
+    assert!(force > 0.0 && common::contact_column(&terms, "_active") == 9.0);
     assert!(
         (force + reaction).abs() <= 1e-8 * force,
         "{force} vs reaction {reaction}"
@@ -767,7 +757,7 @@ fn contact_fields_and_history_columns_are_written() {
         .position(|c| c.ends_with("_active"))
         .expect("active column");
     let closed: usize = row[active].parse().expect("a whole number");
-    assert_eq!(closed as f64, history(&terms, "_active"));
+    assert_eq!(closed as f64, common::contact_column(&terms, "_active"));
     assert!(closed > 0, "{}", row[active]);
     let vtu = std::fs::read_to_string(dir.join("m_001_0001.vtu")).expect("vtu");
     // Numbers that name something (a status, a face tag, a material) are integer arrays, so
@@ -786,7 +776,7 @@ fn contact_fields_and_history_columns_are_written() {
     // ASCII (set above), so a NaN would show as text.
     assert!(vtu.contains("format=\"ascii\"") && !vtu.contains("NaN"));
     // Area of the closed nodes = the block's bottom (all 9 nodes closed).
-    let area = history(&terms, "_area");
+    let area = common::contact_column(&terms, "_area");
     assert!((area - 0.25).abs() < 1e-12, "{area}");
     let _ = std::fs::remove_dir_all(&dir);
     // Two passes: each side measures the interface (the lower one by its middle node's 0.25), and
@@ -794,9 +784,9 @@ fn contact_fields_and_history_columns_are_written() {
     let text = text.replace("[[step]]", "two_pass = true\n[[step]]");
     let an = common::analysis(small_blocks(ElementKind::Hex8), &text);
     let (terms, _, _) = common::solve_contact(&an);
-    let area = history(&terms, "_area");
+    let area = common::contact_column(&terms, "_area");
     assert!((area - 0.25).abs() < 1e-12, "two passes: {area}");
-    assert_eq!(history(&terms, "_active"), 10.0);
+    assert_eq!(common::contact_column(&terms, "_active"), 10.0);
 }
 
 #[test]
@@ -1057,7 +1047,7 @@ fn a_frozen_facet_is_left_when_the_node_slides_off_it() {
         gap <= tolerance,
         "penetration of a facet's plane {gap:e} > tolerance {tolerance:e}"
     );
-    let pen = history(&terms, "_max_penetration");
+    let pen = common::contact_column(&terms, "_max_penetration");
     let h = an.contacts[0].facet_size;
     assert!(pen <= 1e-3 * h, "penetration {pen:e}, h = {h:e}");
 }
@@ -1192,7 +1182,7 @@ fn quadratic_contact_surfaces_carry_the_uniform_pressure() {
             .fold(0.0f64, |m, &s| m.max((pressure[s] - 1.0).abs()));
         let bound = if method == "penalty" { 0.05 } else { 1e-6 };
         assert!(worst < bound, "{method}: pressure off 1 by {worst:e}");
-        let area = history(&terms, "_area");
+        let area = common::contact_column(&terms, "_area");
         assert!((area - 1.0).abs() < 1e-9, "{method}: area {area}");
     }
 }
@@ -1250,11 +1240,14 @@ fn multiplier_nodes_spreading_past_the_master_edge_keep_their_facet() {
     let (terms, records, _) = common::solve_contact(&an);
     assert!(records.len() == 2 && records[1].load_factor == 1.0);
     let pass = &an.contacts[0].passes[0];
-    assert_eq!(history(&terms, "_active"), pass.slaves.len() as f64);
+    assert_eq!(
+        common::contact_column(&terms, "_active"),
+        pass.slaves.len() as f64
+    );
     // Uniform pressure (the patch test), within half a per cent.
     let (lo, hi) = (
-        history(&terms, "_min_pressure"),
-        history(&terms, "_max_pressure"),
+        common::contact_column(&terms, "_min_pressure"),
+        common::contact_column(&terms, "_max_pressure"),
     );
     assert!(lo > 0.995e-2 && hi < 1.005e-2, "pressure {lo} … {hi}");
 }
@@ -1315,7 +1308,10 @@ fn a_block_slides_off_the_edge_of_the_base() {
         let last = records.last().expect("increments");
         assert!(last.step == 1 && last.load_factor == 1.0, "{method}");
         // Past the edge, a third of the block still on the base presses it.
-        assert!(history(&terms, "_normal_force") > 0.0, "{method}");
+        assert!(
+            common::contact_column(&terms, "_normal_force") > 0.0,
+            "{method}"
+        );
     }
 }
 
@@ -1384,7 +1380,7 @@ fn a_cube_pressed_into_a_corner_is_held_by_both_flanks() {
             .flatten()
             .filter(|st| st.facet.is_some())
             .fold(0.0f64, |m, st| m.max(-st.gap));
-        let reported = history(&terms, "_max_penetration");
+        let reported = common::contact_column(&terms, "_max_penetration");
         println!(
             "corner, {method}: constrained gap {gap:.3e}, reported penetration {reported:.3e}"
         );
@@ -1532,7 +1528,7 @@ fn a_block_does_not_tunnel_through_a_thin_plate() {
         let pair = contact("multiplier", "").replace("lower_zmax", master);
         let an = common::analysis(mesh.clone(), &format!("{text}{pair}"));
         let (terms, _, _) = common::solve_contact(&an);
-        history(&terms, "_normal_force")
+        common::contact_column(&terms, "_normal_force")
     };
     let (top, all) = (force("lower_zmax"), force("plate_all"));
     assert!(top > 0.5, "{top}");
@@ -1583,7 +1579,7 @@ fn a_large_slide_with_small_sliding_reports_its_penetration() {
             &format!("{text}{}", contact("multiplier", extra)),
         );
         let (terms, _, _) = common::solve_contact(&an);
-        history(&terms, "_max_penetration")
+        common::contact_column(&terms, "_max_penetration")
     };
     let (frozen, followed) = (penetration("small_sliding = true"), penetration(""));
     println!("small sliding {frozen:.3e}, sliding {followed:.3e}");

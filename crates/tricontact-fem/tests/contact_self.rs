@@ -1,8 +1,10 @@
 //! Self-contact: a pair whose slave and master are one surface group. Every node of the group is
 //! a slave against the group's facets that face its own side (`contact::pair`, "Self-contact").
-//! Two checks: the faces of two blocks named as one group are held exactly as a two-pass pair
-//! between them holds them, and a U-shaped body whose slot is squeezed shut does not pass
-//! through itself.
+//! Checks: the faces of two blocks named as one group (and all their outer faces) are held exactly
+//! as a two-pass pair between them holds them; a U-shaped body whose slot is squeezed shut does
+//! not pass through itself, and is held as a pair between the slot's sides holds it; so is a
+//! wedge pressed into a V-groove, its valley nodes on both flanks; the crossing check catches a
+//! node carried through the other side in one step; and what self-contact refuses is refused.
 
 mod common;
 
@@ -13,16 +15,6 @@ use tricontact_fem::assembly::ExtraTerms;
 use tricontact_fem::contact::ContactTerms;
 use tricontact_fem::mesh::{Element, ElementKind, Group, Mesh};
 use tricontact_fem::model::Model;
-
-/// The value of the history column ending in `key`.
-fn column(terms: &ContactTerms, key: &str) -> f64 {
-    terms
-        .history()
-        .into_iter()
-        .find(|(k, _)| k.ends_with(key))
-        .map(|(_, v)| v)
-        .expect("column")
-}
 
 /// A surface group named `name` of the faces `elements` of `mesh`.
 fn face_group(mesh: &Mesh, name: &str, elements: Vec<usize>) -> Group {
@@ -125,9 +117,9 @@ fn two_blocks_named_as_one_surface_are_held_as_a_two_pass_pair_holds_them() {
             let an = common::analysis(mesh.clone(), &blocks_model(pair, method));
             let (terms, records, _) = common::solve_contact(&an);
             let iterations: Vec<usize> = records.iter().map(|r| r.iterations).collect();
-            let force = column(&terms, "_normal_force");
-            let area = column(&terms, "_area");
-            let active = column(&terms, "_active");
+            let force = common::contact_column(&terms, "_normal_force");
+            let area = common::contact_column(&terms, "_area");
+            let active = common::contact_column(&terms, "_active");
             println!(
                 "{method}, {pair:?}: iterations {iterations:?}, force {force:.9e}, area {area:.6}, active {active}"
             );
@@ -335,8 +327,8 @@ fn a_u_shaped_body_squeezed_shut_does_not_pass_through_itself() {
             let (terms, records, _) = common::solve_contact(&an);
             let last = records.last().expect("increments");
             let gap = crossing(&mesh, &last.u);
-            let force = column(&terms, "_normal_force");
-            let depth = column(&terms, "_max_penetration");
+            let force = common::contact_column(&terms, "_normal_force");
+            let depth = common::contact_column(&terms, "_max_penetration");
             println!(
                 "{method}, {pair:?}: {} increments, {} iterations, force {force:.9e}, penetration {depth:.3e}, left wall past the right {gap:.3e}",
                 records.len(),
@@ -545,7 +537,7 @@ nlgeom = true
         let an = common::analysis(mesh.clone(), &model(pair));
         let (terms, records, _) = common::solve_contact(&an);
         let iterations: Vec<usize> = records.iter().map(|r| r.iterations).collect();
-        let force = column(&terms, "_normal_force");
+        let force = common::contact_column(&terms, "_normal_force");
         let (two, _) = common::second_flanks(&terms);
         println!("{pair:?}: iterations {iterations:?}, force {force:.9e}, {two} on two flanks");
         runs.push((iterations, force, two));

@@ -5,7 +5,6 @@
 
 mod common;
 
-use tricontact_fem::assembly::ExtraTerms;
 use tricontact_fem::contact::ContactTerms;
 use tricontact_fem::mesh::ElementKind;
 
@@ -48,15 +47,6 @@ nlgeom = true
     )
 }
 
-fn column(terms: &ContactTerms, key: &str) -> f64 {
-    terms
-        .history()
-        .into_iter()
-        .find(|(k, _)| k.ends_with(key))
-        .map(|(_, v)| v)
-        .expect("column")
-}
-
 /// Each method: the press converges in its four increments, the nodes on the valley line end on
 /// two flanks, and nothing lies deeper behind any flank than the method's own gaps (the
 /// penalty's about `F/α`, the augmented's within its tolerance, the multipliers' round-off).
@@ -72,8 +62,8 @@ fn a_wedge_pressed_into_a_v_groove_is_held_by_both_flanks() {
             let (terms, records, _) = common::solve_contact(&an);
             let last = records.last().expect("increments");
             let (two, _) = common::second_flanks(&terms);
-            let force = column(&terms, "_normal_force");
-            let depth = column(&terms, "_max_penetration");
+            let force = common::contact_column(&terms, "_normal_force");
+            let depth = common::contact_column(&terms, "_max_penetration");
             println!(
                 "{kind:?} {method}: {} increments, {two} nodes on two flanks, normal force {force:.6e}, largest penetration {depth:.3e}",
                 records.len()
@@ -122,7 +112,10 @@ fn the_v_groove_pressed_at_once_is_cut_back_and_ends_as_in_four_increments() {
             assert_eq!(records.last().expect("increments").load_factor, 1.0);
             let (two, _) = common::second_flanks(&terms);
             assert!(two >= 4, "{method}: {two} nodes on two flanks");
-            (column(&terms, "_normal_force"), records.len())
+            (
+                common::contact_column(&terms, "_normal_force"),
+                records.len(),
+            )
         };
         let (stepped, _) = force_of(&model(method));
         // Fewer iterations than the first increment needs (the multipliers need four).
@@ -160,7 +153,7 @@ fn two_passes_hold_the_valley_nodes_on_both_flanks_too() {
             assert_eq!(records.len(), 4, "{method}");
             assert_eq!(records.last().expect("increments").load_factor, 1.0);
             let (two, _) = common::second_flanks(&terms);
-            (column(&terms, "_normal_force"), two)
+            (common::contact_column(&terms, "_normal_force"), two)
         };
         let (single, _) = run(&model(method));
         let passes = model(method).replace(

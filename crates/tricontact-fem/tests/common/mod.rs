@@ -167,6 +167,18 @@ pub fn contact_history(an: &Analysis) -> (RunSummary, Vec<HistoryRow>) {
     (summary, rows)
 }
 
+/// The value of the contact history column ending in `key` (a pair's name, then `_normal_force`,
+/// `_active`, …) at `terms`' committed state.
+pub fn contact_column(terms: &tricontact_fem::contact::ContactTerms, key: &str) -> f64 {
+    use tricontact_fem::assembly::ExtraTerms;
+    terms
+        .history()
+        .into_iter()
+        .find(|(k, _)| k.ends_with(key))
+        .map(|(_, v)| v)
+        .unwrap_or_else(|| panic!("no history column ending in {key}"))
+}
+
 /// The value of history column `name` in `row`.
 pub fn column(row: &[(String, f64)], name: &str) -> f64 {
     row.iter()
