@@ -45,9 +45,9 @@
 //! `method = "multiplier"`, as for `two_pass`); `adjust` is refused too (it would move nodes of
 //! both sides onto each other). The group is a surface, as every master is. A group holding both
 //! faces of a part thinner than the search radius puts each face's nodes behind the other face,
-//! which faces them: initial penetrations deeper than [`SELF_OVERLAP`] of the mean edge are
-//! refused, with that reason. (A part that thins below the radius under load is not caught.)
-//! `tricontact export` refuses self-contact.
+//! which faces them: initial penetrations deeper than a hundredth (`SELF_OVERLAP`) of the mean
+//! edge are refused, with that reason. (A part that thins below the radius under load is not
+//! caught.) `tricontact export` refuses self-contact.
 //!
 //! # Adjust
 //! With `adjust = d`, every slave node whose initial gap is `−d ≤ P < 0` is moved along `W` onto the
