@@ -494,40 +494,7 @@ fn a_v_groove_named_as_one_surface_is_held_as_a_two_pass_pair_holds_it() {
     let group = face_group(&mesh, "groove", both);
     mesh.groups.push(group);
     let model = |pair: &str| {
-        format!(
-            r#"
-[[material]]
-name = "base"
-type = "neo_hooke"
-E = 1000.0
-nu = 0.3
-[[material]]
-name = "wedge"
-type = "neo_hooke"
-E = 100.0
-nu = 0.3
-[[body]]
-group = "lower_solid"
-material = "base"
-[[body]]
-group = "upper_solid"
-material = "wedge"
-[[boundary]]
-group = "lower_zmin"
-fix = ["x", "y", "z"]
-[[boundary]]
-group = "upper_zmax"
-displacement = {{ x = 0.0, y = 0.0, z = -0.04 }}
-[[contact]]
-{pair}
-method = "penalty"
-penalty = 2000.0
-[[step]]
-name = "press"
-increments = 4
-nlgeom = true
-"#
-        )
+        common::v_groove_model(&format!("{pair}\nmethod = \"penalty\"\npenalty = 2000.0"))
     };
     let mut runs = Vec::new();
     for pair in [

@@ -8,43 +8,12 @@ mod common;
 use tricontact_fem::contact::ContactTerms;
 use tricontact_fem::mesh::ElementKind;
 
-/// The V-groove model: a stiff base (`E` 1000) and a soft wedge (100), neo-Hookean, the wedge's
-/// top pressed 0.04 down in four increments.
+/// The V-groove model (`common::v_groove_model`) with the pair of the wedge's bottom against the
+/// groove, by `method`.
 fn model(method: &str) -> String {
-    format!(
-        r#"
-[[material]]
-name = "base"
-type = "neo_hooke"
-E = 1000.0
-nu = 0.3
-[[material]]
-name = "wedge"
-type = "neo_hooke"
-E = 100.0
-nu = 0.3
-[[body]]
-group = "lower_solid"
-material = "base"
-[[body]]
-group = "upper_solid"
-material = "wedge"
-[[boundary]]
-group = "lower_zmin"
-fix = ["x", "y", "z"]
-[[boundary]]
-group = "upper_zmax"
-displacement = {{ x = 0.0, y = 0.0, z = -0.04 }}
-[[contact]]
-slave = "upper_zmin"
-master = "lower_zmax"
-method = "{method}"
-[[step]]
-name = "press"
-increments = 4
-nlgeom = true
-"#
-    )
+    common::v_groove_model(&format!(
+        "slave = \"upper_zmin\"\nmaster = \"lower_zmax\"\nmethod = \"{method}\""
+    ))
 }
 
 /// Each method: the press converges in its four increments, the nodes on the valley line end on

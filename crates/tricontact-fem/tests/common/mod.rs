@@ -226,6 +226,44 @@ pub fn v_groove(
     tricontact_fem::structured::stack(&lower, &upper, [0.0, 0.0, 0.0])
 }
 
+/// The model of [`v_groove`] (without `[mesh]`): a stiff base (`E` 1000) and a soft wedge (100),
+/// neo-Hookean, the wedge's top pressed 0.04 down in four increments, with one `[[contact]]`
+/// table whose keys are `contact`.
+pub fn v_groove_model(contact: &str) -> String {
+    format!(
+        r#"
+[[material]]
+name = "base"
+type = "neo_hooke"
+E = 1000.0
+nu = 0.3
+[[material]]
+name = "wedge"
+type = "neo_hooke"
+E = 100.0
+nu = 0.3
+[[body]]
+group = "lower_solid"
+material = "base"
+[[body]]
+group = "upper_solid"
+material = "wedge"
+[[boundary]]
+group = "lower_zmin"
+fix = ["x", "y", "z"]
+[[boundary]]
+group = "upper_zmax"
+displacement = {{ x = 0.0, y = 0.0, z = -0.04 }}
+[[contact]]
+{contact}
+[[step]]
+name = "press"
+increments = 4
+nlgeom = true
+"#
+    )
+}
+
 /// The slave nodes closed on a second flank at the committed state (`contact::flank`): how
 /// many, and the deepest penetration `−P_G` of those flanks (0 for none).
 pub fn second_flanks(terms: &tricontact_fem::contact::ContactTerms) -> (usize, f64) {
