@@ -540,13 +540,17 @@ fn check(model_path: &Path, mesh_override: Option<PathBuf>) -> Result<(), FemErr
     );
     for pair in &an.contacts {
         let facets: usize = pair.passes.iter().map(|p| p.surface.len()).sum();
+        let passes = if pair.is_self_contact() {
+            "self-contact, facing facets only".to_string()
+        } else {
+            format!("{} pass(es)", pair.passes.len())
+        };
         say!(
-            "contact {}: {}, {} slave nodes, {} facets, {} pass(es), penalty {:.3e}, mean facet edge {:.3e}",
+            "contact {}: {}, {} slave nodes, {} facets, {passes}, penalty {:.3e}, mean facet edge {:.3e}",
             pair.name,
             pair.method,
             pair.passes[0].slaves.len(),
             facets,
-            pair.passes.len(),
             pair.penalty,
             pair.facet_size
         );

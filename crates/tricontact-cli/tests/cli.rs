@@ -201,6 +201,37 @@ fn contact_example_checks() {
     assert!(stdout.contains("no problems found"), "{stdout}");
 }
 
+/// The self-contact example: `check` says the pair is self-contact, and `export` refuses it in
+/// one line, writing nothing.
+#[test]
+fn self_contact_example_checks_and_is_not_exported() {
+    let model = examples_dir().join("self-contact/model.toml");
+    let stdout = run_ok(&["check".as_ref(), model.as_os_str()]);
+    assert!(
+        stdout.contains("contact slot-slot: augmented, 235 slave nodes, 396 facets, self-contact, facing facets only")
+            && stdout.contains("no problems found"),
+        "{stdout}"
+    );
+    let out = temp_dir("self-export").join("clip.inp");
+    let o = bin()
+        .args([
+            "export".as_ref(),
+            model.as_os_str(),
+            "-o".as_ref(),
+            out.as_os_str(),
+        ])
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        stderr.contains("contact 'slot-slot': self-contact (slave = master) is not exported"),
+        "{stderr}"
+    );
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(!out.exists());
+}
+
 fn examples_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples")
 }
