@@ -32,6 +32,13 @@ fn face_group(mesh: &Mesh, name: &str, elements: Vec<usize>) -> Group {
     }
 }
 
+/// Adds to `mesh` the surface group `name` of the faces of the groups `parts`.
+fn add_union(mesh: &mut Mesh, name: &str, parts: &[&str]) {
+    let faces: Vec<usize> = parts.iter().flat_map(|g| elements_of(mesh, g)).collect();
+    let group = face_group(mesh, name, faces);
+    mesh.groups.push(group);
+}
+
 /// The elements of group `name`.
 fn elements_of(mesh: &Mesh, name: &str) -> Vec<usize> {
     mesh.groups
@@ -48,18 +55,14 @@ fn two_blocks() -> Mesh {
     let lower = tricontact_fem::structured::box_mesh([1.0, 1.0, 0.5], [4, 4, 2], ElementKind::Hex8);
     let upper = tricontact_fem::structured::box_mesh([0.6, 0.6, 0.5], [5, 5, 2], ElementKind::Hex8);
     let mut mesh = tricontact_fem::structured::stack(&lower, &upper, [0.2, 0.2, 0.5]);
-    let mut both = elements_of(&mesh, "lower_zmax");
-    both.extend(elements_of(&mesh, "upper_zmin"));
-    let group = face_group(&mesh, "touching", both);
-    mesh.groups.push(group);
+    add_union(&mut mesh, "touching", &["lower_zmax", "upper_zmin"]);
     let sides = ["xmin", "xmax", "ymin", "ymax", "zmin", "zmax"];
-    let all: Vec<usize> = ["lower", "upper"]
+    let all: Vec<String> = ["lower", "upper"]
         .iter()
         .flat_map(|b| sides.iter().map(move |s| format!("{b}_{s}")))
-        .flat_map(|g| elements_of(&mesh, &g))
         .collect();
-    let group = face_group(&mesh, "outside", all);
-    mesh.groups.push(group);
+    let all: Vec<&str> = all.iter().map(String::as_str).collect();
+    add_union(&mut mesh, "outside", &all);
     mesh
 }
 
@@ -388,10 +391,7 @@ fn self_contact_refuses_two_passes_multipliers_and_adjust() {
     }
     let mut plate =
         tricontact_fem::structured::box_mesh([1.0, 1.0, 0.1], [4, 4, 1], ElementKind::Hex8);
-    let mut both = elements_of(&plate, "zmin");
-    both.extend(elements_of(&plate, "zmax"));
-    let group = face_group(&plate, "faces", both);
-    plate.groups.push(group);
+    add_union(&mut plate, "faces", &["zmin", "zmax"]);
     let text = r#"
 [mesh]
 file = "unused.msh"
@@ -437,10 +437,7 @@ fn a_self_contact_node_pushed_through_in_one_step_is_caught() {
         tricontact_fem::structured::box_mesh([1.0, 1.0, 0.5], [12, 12, 1], ElementKind::Hex8);
     let block = tricontact_fem::structured::box_mesh([0.5, 0.5, 1.0], [6, 6, 4], ElementKind::Hex8);
     let mut mesh = tricontact_fem::structured::stack(&base, &block, [0.26, 0.27, 0.51]);
-    let mut both = elements_of(&mesh, "lower_zmax");
-    both.extend(elements_of(&mesh, "upper_zmin"));
-    let group = face_group(&mesh, "faces", both);
-    mesh.groups.push(group);
+    add_union(&mut mesh, "faces", &["lower_zmax", "upper_zmin"]);
     let upper = mesh
         .groups
         .iter()
@@ -489,10 +486,7 @@ fn a_self_contact_node_pushed_through_in_one_step_is_caught() {
 #[test]
 fn a_v_groove_named_as_one_surface_is_held_as_a_two_pass_pair_holds_it() {
     let mut mesh = common::v_groove([16, 4, 4], [8, 3, 3], ElementKind::Hex8);
-    let mut both = elements_of(&mesh, "lower_zmax");
-    both.extend(elements_of(&mesh, "upper_zmin"));
-    let group = face_group(&mesh, "groove", both);
-    mesh.groups.push(group);
+    add_union(&mut mesh, "groove", &["lower_zmax", "upper_zmin"]);
     let model = |pair: &str| {
         common::v_groove_model(&format!("{pair}\nmethod = \"penalty\"\npenalty = 2000.0"))
     };

@@ -578,10 +578,8 @@ fn crossing_candidates(
         .into_iter()
         .filter(|hit| {
             let [a, b, c] = pass.surface.corners(hit.facet, x);
-            (b - a)
-                .cross(&(c - a))
-                .try_normalize(0.0)
-                .is_some_and(|w| tricontact::contact::faces(&w, &n))
+            tricontact::Facet::new(a, b, c)
+                .is_ok_and(|f| tricontact::contact::faces(&f.normal(), &n))
         })
         .map(|hit| hit.facet)
         .collect()

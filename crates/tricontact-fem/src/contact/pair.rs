@@ -133,9 +133,10 @@ fn fan_normal(surface: &Surface, fan: &[u32], s: usize, x: &[Vec3]) -> Vec3 {
             Some(1) => (b, c, a),
             _ => (c, a, b),
         };
-        match (b - a).cross(&(c - a)).try_normalize(0.0) {
-            Some(w) => n + (p - o).angle(&(q - o)) * w,
-            None => n,
+        // A degenerate facet (a sliver, whose normal is round-off) adds nothing.
+        match tricontact::Facet::new(a, b, c) {
+            Ok(facet) => n + (p - o).angle(&(q - o)) * facet.normal(),
+            Err(_) => n,
         }
     })
 }
