@@ -17,7 +17,7 @@ use crate::search::screen::{Bounds, Limits, Listed, NEAR, Outcome, Stage};
 use crate::search::surface::{Surface, SurfaceError};
 
 /// Queries answered in one sequential run of [`Neighbourhoods::closest_all_into`].
-const CHUNK: usize = 256;
+const CHUNK: usize = 1024;
 
 /// The best candidate of an incremental query so far; `closest` is `None` for the first listed
 /// facet, whose closest point is already in the query's answer slot.
