@@ -59,8 +59,9 @@
 //! pass, into a buffer the calling thread keeps from call to call; the bounds read it (one array
 //! instead of the positions and the reference positions, and no subtraction per facet). Queries
 //! go in chunks of 1024 (in parallel; 2–4 % faster than 256 on an Intel Xeon with 2 MB of
-//! second-level cache a core, no different on the AMD machines); within a chunk, a group at a time (one per lane: eight with
-//! AVX-512, four otherwise), their first listed facets are measured together (`search::lanes`)
+//! second-level cache a core, no different on the AMD machines); within a chunk, a group at a
+//! time (one per lane: eight with AVX-512, four otherwise), their first listed facets are
+//! measured together (`search::lanes`)
 //! and written as the answers, and each query is screened: every facet the bounds cannot exclude
 //! is put aside (all exclusions are against the first facet's distance; measuring others can only
 //! lower it). The queries whose lists must be walked beyond the record then walk them, their first
@@ -70,15 +71,15 @@
 //! the same tests one facet at a time; a query at NaN or infinity has no answer, as in the tree.
 //! What the chunk's end reads is asked for early (the lines of a walk's first and sixth further
 //! entries as soon as the query is found to walk, the corners of a facet when it is put aside),
-//! and the answers' lines are asked for with the intent to write them (`prefetchw`) four groups
-//! ahead.
+//! the answers' lines are asked for with the intent to write them (`prefetchw`) four groups
+//! ahead, and the records 32 queries ahead.
 //!
 //! On the 10⁶-facet torus after a motion of 0.01 element sizes, 11.9 % of the queries need more
 //! than their first facet (0.07 facets put aside per query; 6.7 % walk, 85 % of them through
 //! exactly three further entries: six facets about as far, as around a node of this mesh), and a
-//! call takes 37–39 ns a query on one core (AMD EPYC, Zen 4): 28.5 with every query taken as
-//! certified after its screen, 33 with no query walking (timing-only variants); the screen costs
-//! about 8.5 ns. The measurements behind each choice above, and the alternatives measured and not
+//! call took about 33 ns a query on one core of an AMD EPYC (Zen 4, measured before the chunks
+//! of 1024 and the records asked for ahead) and takes 29 on an Intel Xeon (about 25 there with
+//! the queries not certified at once left unanswered, a timing-only variant). The measurements behind each choice above, and the alternatives measured and not
 //! kept (among them bounds for a group of queries or for a whole list that read no motion per
 //! listed facet, and the record's listed facets measured instead of screened), are in
 //! `docs/search-benchmarks.md` ("The incremental search, as measured").
