@@ -274,6 +274,39 @@ fn torus_queries_refit_and_incremental_search_match_brute_force() {
         lists.closest_all_into(&mut bvh, &surface, &moved, &queries, 1.0, &mut buffer[1..]),
         Err(SurfaceError::AnswerCount { answers, queries: q }) if answers + 1 == q
     ));
+    // The lists brought to the new positions once (the motions and the longest), then answering
+    // twice, with a second `Moved` alive beside the first (its own motions' buffer): the same
+    // answers and counts as the calls that do both at once.
+    let at = lists.moved(&surface, &moved).unwrap();
+    assert_eq!(at.motion().to_bits(), lists.motion(&moved).to_bits());
+    let at_start = lists.moved(&surface, &nodes).unwrap();
+    assert_eq!(at_start.motion(), 0.0);
+    for _ in 0..2 {
+        let mut again = vec![None; queries.len()];
+        let stats_again = at
+            .closest_all_into(&mut bvh, &queries, f64::INFINITY, &mut again)
+            .unwrap();
+        assert_eq!(
+            (again.as_slice(), stats_again),
+            (incremental.as_slice(), stats)
+        );
+    }
+    assert_eq!(
+        at_start
+            .closest_all(&mut bvh, &queries, f64::INFINITY)
+            .unwrap()
+            .0,
+        first
+    );
+    assert!(matches!(
+        at.closest_all(&mut bvh, &queries[1..], 1.0),
+        Err(SurfaceError::QueryCount { expected, given }) if expected == given + 1
+    ));
+    assert!(matches!(
+        lists.moved(&surface, &moved[1..]),
+        Err(SurfaceError::PositionCount { .. })
+    ));
+    drop((at, at_start));
     assert_eq!(bvh.update(&surface, &moved).unwrap(), Update::Refit);
     assert_eq!(
         bvh.closest_all(&surface, &queries, f64::INFINITY),
@@ -1285,11 +1318,19 @@ fn a_tree_or_lists_refuse_another_surface_of_the_same_size() {
         err.to_string().contains("neighbourhood lists was made"),
         "{err}"
     );
+    assert!(other_surface(lists.moved(&other, &nodes).unwrap_err()));
     // A tree of the other surface with the lists of the first: refused too.
     let mut other_bvh = Bvh::build(&other, &nodes, 0.0).unwrap();
     assert!(other_surface(
         lists
             .closest_all(&mut other_bvh, &one, &nodes, &queries, 1.0)
+            .unwrap_err()
+    ));
+    assert!(other_surface(
+        lists
+            .moved(&one, &nodes)
+            .unwrap()
+            .closest_all(&mut other_bvh, &queries, 1.0)
             .unwrap_err()
     ));
     // The same surface, or an equal copy, is searched as before.

@@ -33,6 +33,6 @@ pub mod surface;
 
 pub use aabb::Aabb;
 pub use bvh::{Bvh, LEAF_SIZE, REBUILD_RATIO, Update};
-pub use incremental::{IncrementalStats, Neighbourhoods};
+pub use incremental::{IncrementalStats, Moved, Neighbourhoods};
 pub use query::{HINT_CHUNK, Hit, Query, brute_force_closest, measure, sort_hits};
 pub use surface::{MAX_FACETS, Surface, SurfaceError};

@@ -5,7 +5,7 @@
 
 use rayon::prelude::*;
 
-use super::{Entry, IncrementalStats, LISTS, NONE, Neighbourhoods, longer};
+use super::{Entry, IncrementalStats, Moved, NONE, Neighbourhoods};
 use crate::closest::{ClosestPoint, closest_point_and_distance_squared};
 use crate::facet::{DEGENERACY_TOLERANCE, Facet};
 use crate::linalg::Vec3;
@@ -37,9 +37,10 @@ struct Best {
 /// squared search distance, and the facets that were degenerate when the lists were made and are
 /// valid now.
 ///
-/// Built only by [`Neighbourhoods::closest_all_into`] once it has checked that the surface is the
-/// lists' (its key: as many facets and nodes, the same facets) and that `positions` has a
-/// position for each node. Every listed facet was read from the surface when the lists were made,
+/// Built only by [`Moved::closest_all_into`], from a [`Moved`], which only
+/// [`Neighbourhoods::moved`] makes, once it has checked that the surface is the lists' (its key:
+/// as many facets and nodes, the same facets) and that `positions` has a position for each node
+/// (and `moves` one motion per node). Every listed facet was read from the surface when the lists were made,
 /// so it is below the facet count, hence a facet of `surface`; each of its nodes indexes
 /// `positions` and `moves` (one per node). The hot paths read them without bounds checks on that
 /// ground (measured: 6 % less time at 10⁴ queries, 11 % fewer instructions; see
@@ -148,27 +149,6 @@ struct Lane {
 }
 
 impl Neighbourhoods {
-    /// Writes each surface node's motion `x − x₀` since the lists were made into `moves` (resized
-    /// to the nodes) and returns the longest (NaN if one is NaN), in one pass.
-    fn moves_into(&self, positions: &[Vec3], moves: &mut Vec<Vec3>) -> f64 {
-        const RUN: usize = 4096;
-        moves.resize(self.reference.len(), Vec3::zeros());
-        moves
-            .par_chunks_mut(RUN)
-            .zip(self.reference.par_chunks(RUN))
-            .zip(positions.par_chunks(RUN))
-            .map(|((m, x0), x)| {
-                let mut big = 0.0;
-                for ((m, x0), x) in m.iter_mut().zip(x0).zip(x) {
-                    *m = x - x0;
-                    big = longer(big, m.norm_squared());
-                }
-                big
-            })
-            .reduce(|| 0.0, longer)
-            .sqrt()
-    }
-
     /// The closest facet to each query (the same queries, in the same order, as when the lists
     /// were made; their points may have moved) at node `positions`, within `max_distance`: equal
     /// to [`Bvh::closest_all`] at these positions. Queries the lists cannot certify fall back to
@@ -193,7 +173,9 @@ impl Neighbourhoods {
     }
 
     /// [`Neighbourhoods::closest_all`] written into `hits`, one entry per query (a buffer reused
-    /// from call to call, see [`Bvh::closest_all_into`]).
+    /// from call to call, see [`Bvh::closest_all_into`]). It is [`Neighbourhoods::moved`] then
+    /// [`Moved::closest_all_into`]; to answer more than once at the same positions, make the
+    /// [`Moved`] once.
     ///
     /// # Errors
     /// As [`Neighbourhoods::closest_all`], and [`SurfaceError::AnswerCount`] if `hits` does not
@@ -207,34 +189,61 @@ impl Neighbourhoods {
         max_distance: f64,
         hits: &mut [Option<Hit>],
     ) -> Result<IncrementalStats, SurfaceError> {
-        surface.check_positions(positions)?;
-        self.surface.check(surface, LISTS)?;
+        self.moved(surface, positions)?
+            .closest_all_into(bvh, queries, max_distance, hits)
+    }
+}
+
+impl Moved<'_> {
+    /// The closest facet to each query (the same queries, in the same order, as when the lists
+    /// were made; their points may have moved) at the node positions of this [`Moved`], within
+    /// `max_distance`: equal to [`Bvh::closest_all`] at these positions. Queries the lists cannot
+    /// certify fall back to `bvh`, which is updated to the positions first (once, and only then).
+    ///
+    /// # Errors
+    /// [`SurfaceError::OtherSurface`] if `bvh` was built on another surface than the lists;
+    /// [`SurfaceError::QueryCount`] if the number of queries changed.
+    pub fn closest_all(
+        &self,
+        bvh: &mut Bvh,
+        queries: &[Query],
+        max_distance: f64,
+    ) -> Result<(Vec<Option<Hit>>, IncrementalStats), SurfaceError> {
+        let mut hits = vec![None; queries.len()];
+        let stats = self.closest_all_into(bvh, queries, max_distance, &mut hits)?;
+        Ok((hits, stats))
+    }
+
+    /// [`Moved::closest_all`] written into `hits`, one entry per query (a buffer reused from
+    /// call to call, see [`Bvh::closest_all_into`]).
+    ///
+    /// # Errors
+    /// As [`Moved::closest_all`], and [`SurfaceError::AnswerCount`] if `hits` does not have one
+    /// entry per query.
+    pub fn closest_all_into(
+        &self,
+        bvh: &mut Bvh,
+        queries: &[Query],
+        max_distance: f64,
+        hits: &mut [Option<Hit>],
+    ) -> Result<IncrementalStats, SurfaceError> {
+        let (lists, surface, positions) = (self.lists, self.surface, self.positions);
         bvh.surface.check(surface, TREE)?;
-        if queries.len() != self.queries() {
+        if queries.len() != lists.queries() {
             return Err(SurfaceError::QueryCount {
-                expected: self.queries(),
+                expected: lists.queries(),
                 given: queries.len(),
             });
         }
         check_answers(queries.len(), hits.len())?;
-        let valid: Vec<u32> = self
-            .degenerate
-            .iter()
-            .copied()
-            .filter(|&f| !is_degenerate(&surface.corners(f, positions)))
-            .collect();
-        // The motions go into this thread's buffer, kept from call to call: a fresh one of 12 MB
-        // (10⁶ facets) was mapped and zeroed by the system at every call.
-        let mut moves = MOVES.take();
-        let delta = self.moves_into(positions, &mut moves);
         let shared = Shared {
             surface,
             positions,
-            moves: &moves,
-            delta,
+            moves: &self.moves,
+            delta: self.delta,
             max2: squared_limit(max_distance),
-            valid: &valid,
-            sound: delta < self.robust,
+            valid: &self.valid,
+            sound: self.delta < lists.robust,
         };
         // Answers are written in place; the (rare) uncertified queries are collected with their
         // best facet as the tree's hint.
@@ -242,7 +251,7 @@ impl Neighbourhoods {
             .par_chunks_mut(CHUNK)
             .zip(queries.par_chunks(CHUNK))
             .enumerate()
-            .map(|(c, (hits, queries))| self.answer_chunk(c * CHUNK, queries, &shared, hits))
+            .map(|(c, (hits, queries))| lists.answer_chunk(c * CHUNK, queries, &shared, hits))
             .reduce(
                 || (0, Vec::new()),
                 |(m1, mut f1), (m2, f2)| {
@@ -267,10 +276,11 @@ impl Neighbourhoods {
                 hits[*i] = hit;
             }
         }
-        MOVES.set(moves);
         Ok(stats)
     }
+}
 
+impl Neighbourhoods {
     /// Answers the queries `first..first + queries.len()` into `hits` (see the module
     /// documentation, "Order of work"): a group of lanes at a time, each group staged
     /// ([`Self::stage_group`]), measured and screened ([`Self::measure_group`]) and its queries
@@ -732,14 +742,6 @@ fn offer(best: &mut Option<Best>, surface: &Surface, positions: &[Vec3], q: &Que
     }
 }
 
-thread_local! {
-    /// The node motions of the last call on this thread (see [`Neighbourhoods::closest_all_into`]):
-    /// 24 bytes per surface node, held until the thread ends. A call takes the buffer out and puts
-    /// it back, so a call nested on the same thread (a rayon worker stealing another call's work
-    /// while it waits) finds it empty and uses one of its own.
-    static MOVES: std::cell::Cell<Vec<Vec3>> = const { std::cell::Cell::new(Vec::new()) };
-}
-
 /// Asks the processor to bring `x`'s cache line closer: a hint, which reads nothing and for which
 /// nothing waits.
 #[inline(always)]
@@ -775,7 +777,7 @@ fn prefetch_for_write<T>(x: &[T]) {
 }
 
 /// `true` when the facet is degenerate (the tree leaves such facets out).
-fn is_degenerate([a, b, c]: &[Vec3; 3]) -> bool {
+pub(super) fn is_degenerate([a, b, c]: &[Vec3; 3]) -> bool {
     Facet::new(*a, *b, *c).is_err()
 }
 

@@ -55,14 +55,14 @@
 //! is the tree's, exactly.
 //!
 //! # Order of work
-//! Each node's motion `x − x₀` is computed once per call, with `δ`, the longest, in the same
-//! pass, into a buffer the calling thread keeps from call to call; the bounds read it (one array
-//! instead of the positions and the reference positions, and no subtraction per facet). Queries
-//! go in chunks of 1024 (in parallel; 2–4 % faster than 256 on an Intel Xeon with 2 MB of
-//! second-level cache a core, no different on the AMD machines); within a chunk, a group at a
+//! Each node's motion `x − x₀` is computed once for the new positions
+//! ([`Neighbourhoods::moved`], the counterpart of a tree's refit), with `δ`, the longest, in the
+//! same pass, into a buffer the calling thread keeps from call to call; the bounds read it (one
+//! array instead of the positions and the reference positions, and no subtraction per facet).
+//! Queries go in chunks of 1024 (in parallel; 2–4 % faster than 256 on an Intel Xeon with 2 MB
+//! of second-level cache a core, no different on the AMD machines); within a chunk, a group at a
 //! time (one per lane: eight with AVX-512, four otherwise), their first listed facets are
-//! measured together (`search::lanes`)
-//! and written as the answers, and each query is screened: every facet the bounds cannot exclude
+//! measured together (`search::lanes`) and written as the answers, and each query is screened: every facet the bounds cannot exclude
 //! is put aside (all exclusions are against the first facet's distance; measuring others can only
 //! lower it). The queries whose lists must be walked beyond the record then walk them, their first
 //! further entries read all together so that their fetches from memory overlap. The facets put
@@ -117,6 +117,9 @@
 
 mod answer;
 mod lists;
+mod moved;
+
+pub use moved::Moved;
 
 use rayon::prelude::*;
 
