@@ -26,7 +26,10 @@
 //! order. `closest` times [`Bvh::closest_all_into`], `random` the same on the queries shuffled
 //! (`search_bench`'s random order); `incremental` makes neighbourhood lists (skin half an
 //! element), deforms the torus by 0.01 element sizes as `search_bench` does, times
-//! [`Neighbourhoods::closest_all_into`] and prints the facets it measured per query. `walk` times,
+//! [`Neighbourhoods::closest_all_into`] and prints the facets it measured per query; of that call,
+//! `moved` times the first part alone ([`Neighbourhoods::moved`]: the node motions and the
+//! longest, the counterpart of `refit`, printed per query) and `query` the second
+//! ([`Moved::closest_all_into`](tricontact::search::Moved::closest_all_into) on one `Moved`). `walk` times,
 //! on the same motion, the alternative the incremental search does not take: from each query's
 //! facet before the motion, a walk to nearer facets sharing a node ([`Surface::neighbours`], the
 //! scalar kernel on the facet and all its neighbours, until none is nearer), and counts the facets
@@ -59,7 +62,7 @@ use tricontact::search::scenes::{self, torus};
 use tricontact::search::{Bvh, Hit, Neighbourhoods, Query, Surface};
 use tricontact::{ClosestPoint, Feature, Vec3, distance_squared_to_triangle};
 
-const USAGE: &str = "usage: search_loop closest|random|incremental|walk|build|refit|stream|carried [nu ≥ 8, default 316] [reps ≥ 1, default 15] [threads ≥ 1, default 1]";
+const USAGE: &str = "usage: search_loop closest|random|incremental|moved|query|walk|build|refit|stream|carried [nu ≥ 8, default 316] [reps ≥ 1, default 15] [threads ≥ 1, default 1]";
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -79,6 +82,8 @@ fn main() -> ExitCode {
             "closest"
                 | "random"
                 | "incremental"
+                | "moved"
+                | "query"
                 | "walk"
                 | "build"
                 | "refit"
@@ -167,19 +172,34 @@ fn main() -> ExitCode {
                 .expect("lists for the torus");
             let moved = scenes::deformed(&nodes, h, 0.01);
             let mut tree = bvh.clone();
-            timed(reps, || {
-                let stats = lists
-                    .closest_all_into(
-                        &mut tree,
-                        &surface,
-                        &moved,
-                        &queries,
-                        f64::INFINITY,
-                        &mut out,
-                    )
-                    .expect("incremental search");
-                measured = Some(stats.measured);
-            })
+            if mode == "moved" {
+                timed(reps, || {
+                    let at = lists.moved(&surface, &moved).expect("motions");
+                    std::hint::black_box(at.motion());
+                })
+            } else if mode == "query" {
+                let at = lists.moved(&surface, &moved).expect("motions");
+                timed(reps, || {
+                    let stats = at
+                        .closest_all_into(&mut tree, &queries, f64::INFINITY, &mut out)
+                        .expect("incremental search");
+                    measured = Some(stats.measured);
+                })
+            } else {
+                timed(reps, || {
+                    let stats = lists
+                        .closest_all_into(
+                            &mut tree,
+                            &surface,
+                            &moved,
+                            &queries,
+                            f64::INFINITY,
+                            &mut out,
+                        )
+                        .expect("incremental search");
+                    measured = Some(stats.measured);
+                })
+            }
         }
     });
     let nq = queries.len() as f64;
