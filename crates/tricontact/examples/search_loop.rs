@@ -42,12 +42,15 @@
 //! axis moving its outer rim by as much, with the query points fixed or carried along (a query's
 //! motion and the surface's then largely cancel in the first-order bound but not in the Lipschitz
 //! bound, so the queries walk further). Expected output
-//! (the time varies with the machine; these lines are from an AMD EPYC Zen 4, with AVX-512; an
-//! AVX2 machine, Zen 3, read 471.0 ns for the `closest` line):
+//! (the time varies with the machine; these lines are from an AMD EPYC Zen 4, with AVX-512, but
+//! for `moved` and `query`, from an Intel Xeon with AVX-512; an AVX2 machine, Zen 3, read 471.0
+//! ns for the `closest` line):
 //!
 //! ```text
 //! closest, 99856 facets: 313.9 ns per query (best of 15 calls, one core; median 359.8)
 //! incremental, 1000000 facets: 34.2 ns per query (best of 20 calls, one core; median 47.0); 1.071 facets measured per query
+//! moved, 1000000 facets: 1.2 ns per query (best of 20 calls, one core; median 1.3)
+//! query, 1000000 facets: 27.4 ns per query (best of 20 calls, one core; median 27.9); 1.071 facets measured per query
 //! build, 1000000 facets: 223.9 ns per facet (best of 4 calls, one core; median 239.4)
 //! refit, 1000000 facets: 45.4 ns per facet (best of 6 calls, one core; median 52.0)
 //! walk, 1000000 facets: 218.1 ns per query (best of 5 calls, one core; median 231.1); 13.16 facets measured per query, 0 answers differ from the tree
