@@ -25,9 +25,11 @@
 //! each (the largest node motion is printed, in element sizes). After a deformation each search
 //! first brings its structure to the new positions, once, whatever the number of queries: the
 //! tree is refitted (`Bvh::update`), the lists get the node motions and the longest
-//! (`Neighbourhoods::moved`). Both are timed, then the two queries on them, and two ratios are
-//! printed: the query alone against the query alone, and update plus query against update plus
-//! query (what a solver that searches once per iteration pays).
+//! (`Neighbourhoods::moved`). The two updates are timed (alternated), then the two queries on them
+//! (alternated), then update and query in one go on each side (alternated: refit then
+//! `Bvh::closest_all_into`, against `Neighbourhoods::closest_all_into`, which is what a solver
+//! that searches once per iteration calls). Two ratios are printed: query against query, and
+//! update and query against update and query, the latter from the one-go times.
 
 use std::sync::Mutex;
 use std::time::Instant;
@@ -266,9 +268,10 @@ fn scene(nu: u32, nv: u32) {
 }
 
 /// Neighbourhood lists made at the initial positions (skin half an element), then, after
-/// deformations of 0.01, 0.1 and 0.2 element sizes: the incremental search against the full query
-/// alone and against the refit plus the full query (the tree must follow the nodes; the lists need
-/// not).
+/// deformations of 0.01, 0.1 and 0.2 element sizes: each search's update to the new positions (the
+/// tree's refit, the lists' node motions), each query at them, and both in one go on each side;
+/// the incremental query against the full query, and the incremental search's one call against
+/// refit plus full query.
 fn incremental(
     surface: &Surface,
     nodes: &[Vec3],
@@ -292,24 +295,27 @@ fn incremental(
     for a in [0.01, 0.1, 0.2] {
         let moved = scenes::deformed(nodes, h, a);
         let tree = Mutex::new(bvh.clone());
-        let (t_refit, kind) = time_one_core(1, || {
-            tree.lock()
-                .expect("tree")
-                .update(surface, &moved)
-                .expect("update")
-        });
+        // The two updates to the new positions, their batches alternated.
+        let ((t_refit, kind), (t_moved, delta)) = time_pair_one_core(
+            3,
+            || {
+                tree.lock()
+                    .expect("tree")
+                    .update(surface, &moved)
+                    .expect("update")
+            },
+            || lists.moved(surface, &moved).expect("motions").motion(),
+        );
         assert_eq!(kind, Update::Refit);
         let refitted = tree.lock().expect("tree").clone();
         let buffer = Mutex::new(vec![None; queries.len()]);
-        // A fallback updates the tree (each call: the update refits it again). A buffer of its own,
-        // starting empty, so an answer the incremental search failed to write would show below.
+        // A fallback updates the tree (each call: the update refits it again). Each incremental
+        // path writes into a buffer of its own, starting empty, so that an answer it failed to
+        // write would show below.
         let stale = Mutex::new(bvh.clone());
         let own = Mutex::new(vec![None; queries.len()]);
-        let (t_moved, delta) = time_one_core(3, || {
-            lists.moved(surface, &moved).expect("motions").motion()
-        });
         let at = lists.moved(surface, &moved).expect("motions");
-        // The full query's and the incremental search's batches alternated, for the ratio.
+        // The two queries at the new positions, their batches alternated.
         let ((t_full, ()), (t_inc, stats)) = time_pair_one_core(
             3,
             || {
@@ -324,39 +330,58 @@ fn incremental(
                     .expect("incremental")
             },
         );
-        // Both parts in one call, as a solver that searches once per iteration makes it.
         drop(at);
-        let (t_call, _) = time_one_core(3, || {
-            let mut out = own.lock().expect("buffer");
-            lists
-                .closest_all_into(
-                    &mut stale.lock().expect("tree"),
-                    surface,
-                    &moved,
-                    queries,
-                    inf,
-                    &mut out,
-                )
-                .expect("incremental")
-        });
+        // Update and query in one go on each side, as a solver that searches once per iteration
+        // pays them, their batches alternated.
+        let one = Mutex::new(vec![None; queries.len()]);
+        let tree_out = Mutex::new(vec![None; queries.len()]);
+        let ((t_tree_call, ()), (t_call, _)) = time_pair_one_core(
+            3,
+            || {
+                let mut tree = tree.lock().expect("tree");
+                tree.update(surface, &moved).expect("update");
+                let mut out = tree_out.lock().expect("buffer");
+                tree.closest_all_into(surface, queries, inf, &mut out)
+                    .expect("one answer per query");
+            },
+            || {
+                let mut out = one.lock().expect("buffer");
+                lists
+                    .closest_all_into(
+                        &mut stale.lock().expect("tree"),
+                        surface,
+                        &moved,
+                        queries,
+                        inf,
+                        &mut out,
+                    )
+                    .expect("incremental")
+            },
+        );
         let full = buffer.lock().expect("buffer").clone();
-        let answers = own.into_inner().expect("buffer");
-        let mismatches = answers.iter().zip(&full).filter(|(a, b)| a != b).count();
+        let mismatches: usize = [own, one]
+            .into_iter()
+            .map(|answers| {
+                let answers = answers.into_inner().expect("buffer");
+                answers.iter().zip(&full).filter(|(a, b)| a != b).count()
+            })
+            .sum();
         let changed = hits
             .iter()
             .zip(&full)
             .filter(|(a, b)| a.map(|h| h.facet) != b.map(|h| h.facet))
             .count();
         println!(
-            "after motion {:.2} h      refit {:.2} ms, motions {:.2} ms; full query {:.2} ms, incremental {:.2} ms per core (motions and query in one call {:.2} ms): {:.1}× the query alone, {:.1}× update + query; {:.2} facets measured per query, {} fallbacks ({:.3} %), {changed} answers changed, {mismatches} differ from the full query",
+            "after motion {:.2} h      update: refit {:.2} ms, motions {:.2} ms; query: full {:.2} ms, incremental {:.2} ms; both in one go: {:.2} ms and {:.2} ms (per core): {:.1}× query against query, {:.1}× update and query against update and query; {:.2} facets measured per query, {} fallbacks ({:.3} %), {changed} answers changed, {mismatches} differ from the full query",
             delta / h,
             t_refit * 1e3,
             t_moved * 1e3,
             t_full * 1e3,
             t_inc * 1e3,
+            t_tree_call * 1e3,
             t_call * 1e3,
             t_full / t_inc,
-            (t_refit + t_full) / (t_moved + t_inc),
+            t_tree_call / t_call,
             stats.measured as f64 / nq,
             stats.fallbacks,
             100.0 * stats.fallbacks as f64 / nq

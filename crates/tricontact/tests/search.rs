@@ -619,6 +619,18 @@ fn incremental_search_falls_back_when_queries_move_far() {
     }
     assert_eq!(stats.fallbacks, 100);
     assert_eq!(stats.update, Some(Update::Refit));
+    // The same through a `Moved` made once: the same answers and fallbacks, into a buffer of the
+    // right size only.
+    let at = lists.moved(&surface, &nodes).unwrap();
+    let mut into = vec![None; queries.len()];
+    let moved_stats = at
+        .closest_all_into(&mut bvh, &queries, f64::INFINITY, &mut into)
+        .unwrap();
+    assert_eq!((into.as_slice(), moved_stats), (hits.as_slice(), stats));
+    assert!(matches!(
+        at.closest_all_into(&mut bvh, &queries, 1.0, &mut into[1..]),
+        Err(SurfaceError::AnswerCount { answers, queries: q }) if answers + 1 == q
+    ));
     // Back where the lists were made: every query is certified, the tree is not touched.
     for (k, q) in queries.iter_mut().enumerate() {
         if k % 2 == 0 {

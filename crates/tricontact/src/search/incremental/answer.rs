@@ -1,7 +1,7 @@
-//! Answering a call from the lists: the motions pass, then chunks of queries in parallel, each a
-//! group of lanes at a time (first listed facets measured together, each query screened), the
-//! walks, the facets put aside, and the fallbacks to the tree. See the parent module, "Order of
-//! work", for the order and why.
+//! Answering from the lists at new positions (a [`Moved`], whose node motions `moved.rs` computes):
+//! chunks of queries in parallel, each a group of lanes at a time (first listed facets measured
+//! together, each query screened), the walks, the facets put aside, and the fallbacks to the tree.
+//! See the parent module, "Order of work", for the order and why.
 
 use rayon::prelude::*;
 
@@ -16,7 +16,7 @@ use crate::search::query::{Hit, Query, check_answers, squared_limit};
 use crate::search::screen::{Bounds, Limits, Listed, NEAR, Outcome, Stage};
 use crate::search::surface::{Surface, SurfaceError};
 
-/// Queries answered in one sequential run of [`Neighbourhoods::closest_all_into`].
+/// Queries answered in one sequential run of [`Moved::closest_all_into`].
 const CHUNK: usize = 1024;
 
 /// How many queries ahead of the group being staged its record is asked for (16 to 256 measured

@@ -84,9 +84,9 @@
 //! listed facet, and the record's listed facets measured instead of screened), are in
 //! `docs/search-benchmarks.md` ("The incremental search, as measured").
 //!
-//! A query whose answer is not certified falls back to the tree, which
-//! [`Neighbourhoods::closest_all`] updates first, once, only if some query needs it: the certified
-//! queries never touch the tree.
+//! A query whose answer is not certified falls back to the tree, which [`Moved::closest_all`]
+//! (and [`Neighbourhoods::closest_all`]) updates first, once, only if some query needs it: the
+//! certified queries never touch the tree.
 //! [`IncrementalStats`] counts fallbacks and measured facets. When the nodes have moved by about
 //! half the skin, lists fail and should be made again.
 //!
@@ -129,7 +129,7 @@ use crate::search::direction::Direction;
 use crate::search::screen::NEAR;
 use crate::search::surface::SurfaceKey;
 
-/// What one call of [`Neighbourhoods::closest_all`] did.
+/// What one call of [`Moved::closest_all`] (or [`Neighbourhoods::closest_all`]) did.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct IncrementalStats {
     /// Queries answered.

@@ -54,6 +54,8 @@ impl Neighbourhoods {
             .collect();
         let mut moves = MOVES.take();
         let delta = self.moves_into(positions, &mut moves);
+        // The unchecked reads of `Moved::closest_all_into` rely on one motion per node.
+        debug_assert_eq!(moves.len(), surface.node_count());
         Ok(Moved {
             lists: self,
             surface,
@@ -107,7 +109,9 @@ impl std::fmt::Debug for Moved<'_> {
 impl Drop for Moved<'_> {
     /// Gives the motions' buffer back to the thread, for the next [`Neighbourhoods::moved`].
     fn drop(&mut self) {
-        MOVES.set(std::mem::take(&mut self.moves));
+        let moves = std::mem::take(&mut self.moves);
+        // While the thread's locals are being destroyed the buffer is simply freed.
+        let _ = MOVES.try_with(|slot| slot.set(moves));
     }
 }
 
