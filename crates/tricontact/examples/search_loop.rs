@@ -12,6 +12,8 @@
 //! full query 311–313 and 353–394: the medians' ratio was 6.1–8.8, the bests' 6.0–8.2. The
 //! incremental search, which streams its lists from memory, varies more between calls.
 //!
+//! [`Moved::closest_all_into`]: tricontact::search::Moved::closest_all_into
+//!
 //! ```text
 //! cargo run --release -p tricontact --example search_loop -- closest 316 15
 //! cargo run --release -p tricontact --example search_loop -- incremental 1000 20
@@ -29,11 +31,11 @@
 //! [`Neighbourhoods::closest_all_into`] and prints the facets it measured per query; of that call,
 //! `moved` times the first part alone ([`Neighbourhoods::moved`]: the node motions and the
 //! longest, the counterpart of `refit`, printed per query) and `query` the second
-//! ([`Moved::closest_all_into`](tricontact::search::Moved::closest_all_into) on one `Moved`). `walk` times,
-//! on the same motion, the alternative the incremental search does not take: from each query's
-//! facet before the motion, a walk to nearer facets sharing a node ([`Surface::neighbours`], the
-//! scalar kernel on the facet and all its neighbours, until none is nearer), and counts the facets
-//! it measures and the answers that differ from the tree's (a walk certifies none of them).
+//! ([`Moved::closest_all_into`] on one `Moved`). `walk` times, on the same motion, the
+//! alternative the incremental search does not take: from each query's facet before the motion,
+//! a walk to nearer facets sharing a node ([`Surface::neighbours`], the scalar kernel on the facet
+//! and all its neighbours, until none is nearer), and counts the facets it measures and the
+//! answers that differ from the tree's (a walk certifies none of them).
 //! `build` times [`Bvh::build`] and `refit` [`Bvh::update`] (the torus and its deformed copy in
 //! turn), per facet. `stream` times the incremental search's three largest streams and nothing
 //! else (sequential, like `walk`): per query, a 64-byte record and the query read, an answer
