@@ -55,34 +55,36 @@
 //! is the tree's, exactly.
 //!
 //! # Order of work
-//! Each node's motion `x − x₀` is computed once for the new positions
-//! ([`Neighbourhoods::moved`], the counterpart of a tree's refit), with `δ`, the longest, in the
-//! same pass, into a buffer the calling thread keeps from call to call; the bounds read it (one
-//! array instead of the positions and the reference positions, and no subtraction per facet).
-//! Queries go in chunks of 1024 (in parallel; 2–4 % faster than 256 on an Intel Xeon with 2 MB
-//! of second-level cache a core, no different on the AMD machines); within a chunk, a group at a
-//! time (one per lane: eight with AVX-512, four otherwise), their first listed facets are
-//! measured together (`search::lanes`) and written as the answers, and each query is screened: every facet the bounds cannot exclude
-//! is put aside (all exclusions are against the first facet's distance; measuring others can only
-//! lower it). The queries whose lists must be walked beyond the record then walk them, their first
+//! Each node's motion `x − x₀` is computed once for the new positions ([`Neighbourhoods::moved`],
+//! the counterpart of a tree's refit), with `δ`, the longest, in the same pass, into a buffer the
+//! calling thread keeps from call to call; the bounds read it (one array instead of the positions
+//! and the reference positions, and no subtraction per facet). Queries go in chunks of 1024 (in
+//! parallel; 2–4 % faster than 256 on an Intel Xeon with 2 MB of second-level cache a core, no
+//! different on the AMD machines); within a chunk, a group at a time (one per lane: eight with
+//! AVX-512, four otherwise), their first listed facets are measured together (`search::lanes`) and
+//! written as the answers, and each query is screened: every facet the bounds cannot exclude is put
+//! aside (all exclusions are against the first facet's distance; measuring others can only lower
+//! it). The queries whose lists must be walked beyond the record then walk them, their first
 //! further entries read all together so that their fetches from memory overlap. The facets put
 //! aside are then measured a vector of lanes at a time, and a better one replaces the answer. A
 //! query whose first listed facet is missing (empty list, or excluded by the query) goes through
 //! the same tests one facet at a time; a query at NaN or infinity has no answer, as in the tree.
 //! What the chunk's end reads is asked for early (the lines of a walk's first and sixth further
-//! entries as soon as the query is found to walk, the corners of a facet when it is put aside),
-//! the answers' lines are asked for with the intent to write them (`prefetchw`) four groups
-//! ahead, and the records 32 queries ahead.
+//! entries as soon as the query is found to walk, the corners of a facet when it is put aside), the
+//! answers' lines are asked for with the intent to write them (`prefetchw`) four groups ahead, and
+//! the records 32 queries ahead.
 //!
 //! On the 10⁶-facet torus after a motion of 0.01 element sizes, 11.9 % of the queries need more
 //! than their first facet (0.07 facets put aside per query; 6.7 % walk, 85 % of them through
 //! exactly three further entries: six facets about as far, as around a node of this mesh), and a
-//! call took about 33 ns a query on one core of an AMD EPYC (Zen 4, measured before the chunks
-//! of 1024 and the records asked for ahead) and takes 29 on an Intel Xeon (about 25 there with
-//! the queries not certified at once left unanswered, a timing-only variant). The measurements behind each choice above, and the alternatives measured and not
-//! kept (among them bounds for a group of queries or for a whole list that read no motion per
-//! listed facet, and the record's listed facets measured instead of screened), are in
-//! `docs/search-benchmarks.md` ("The incremental search, as measured").
+//! call took about 33 ns a query on one core of an AMD EPYC (Zen 4, measured before the chunks of
+//! 1024 and the records asked for ahead) and takes 29 on an Intel Xeon (there 1.2 for the motions
+//! and 27 for the query after them when timed apart, and about 25 for the one call with the
+//! queries not certified at once left unanswered, a timing-only variant). The measurements behind
+//! each choice above, and the alternatives measured and not kept (among them bounds for a group of
+//! queries or for a whole list that read no motion per listed facet, and the record's listed facets
+//! measured instead of screened), are in `docs/search-benchmarks.md` ("The incremental search, as
+//! measured").
 //!
 //! A query whose answer is not certified falls back to the tree, which [`Moved::closest_all`]
 //! (and [`Neighbourhoods::closest_all`]) updates first, once, only if some query needs it: the
