@@ -105,11 +105,37 @@ impl Pass {
     /// [`tricontact::contact::choose_facet_facing`] with the node's [`Pass::facing`] normal.
     #[must_use]
     pub fn choose(&self, bvh: &Bvh, x: &[Vec3], j: usize) -> Option<(u32, tricontact::NodeFacet)> {
-        let node = u32::try_from(*self.slaves.get(j)?).ok()?;
-        match self.facing(j, x) {
-            Some(n) => choose_facet_facing(&self.surface, bvh, x, node, self.radius, n),
-            None => choose_facet(&self.surface, bvh, x, node, self.radius),
+        let fan = match &self.fans {
+            Some(fans) => Some(fans.get(j)?.as_slice()),
+            None => None,
+        };
+        choose_for(
+            &self.surface,
+            bvh,
+            x,
+            (*self.slaves.get(j)?, fan),
+            self.radius,
+        )
+    }
+}
+
+/// The facet node `s` is constrained against on `surface` at positions `x` (`bvh` its tree
+/// there), within `radius`, and the pair: [`choose_facet`], or with self-contact (`fan`, the
+/// facets around the node) [`choose_facet_facing`] with the node's [`fan_normal`].
+fn choose_for(
+    surface: &Surface,
+    bvh: &Bvh,
+    x: &[Vec3],
+    (s, fan): (usize, Option<&[u32]>),
+    radius: f64,
+) -> Option<(u32, tricontact::NodeFacet)> {
+    let node = u32::try_from(s).ok()?;
+    match fan {
+        Some(fan) => {
+            let n = fan_normal(surface, fan, s, x);
+            choose_facet_facing(surface, bvh, x, node, radius, n)
         }
+        None => choose_facet(surface, bvh, x, node, radius),
     }
 }
 
@@ -971,15 +997,9 @@ fn initial_penetrations(
     let (mut facing, mut away) = (0usize, 0usize);
     let fans = def.is_self_contact().then(|| fans(slaves, surface));
     for (k, &a) in slaves.iter().enumerate() {
-        let Ok(idx) = u32::try_from(a) else { continue };
         // Self-contact: only the facets facing the node's own side of the surface.
-        let chosen = if let Some(fans) = &fans {
-            let n = fan_normal(surface, &fans[k], a, &x);
-            choose_facet_facing(surface, &bvh, &x, idx, h_max, n)
-        } else {
-            choose_facet(surface, &bvh, &x, idx, h_max)
-        };
-        let Some((_, pair)) = chosen else {
+        let fan = fans.as_ref().map(|fans| fans[k].as_slice());
+        let Some((_, pair)) = choose_for(surface, &bvh, &x, (a, fan), h_max) else {
             continue;
         };
         // Only where the two surfaces are roughly parallel (|cos| > 1/2): a slave face at
